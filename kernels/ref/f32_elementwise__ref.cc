@@ -1,0 +1,27 @@
+#include "kernels/ref/f32_elementwise__ref.h"
+
+#include <cstring>
+
+#include "kernels/ref/activation_ref.h"
+
+namespace aprt::kernels {
+
+void f32_add__ref(size_t n, const float* a, const float* b, float* y) {
+  for (size_t i = 0; i < n; ++i) y[i] = a[i] + b[i];
+}
+
+void f32_activation__ref(size_t n, Act act, const float* x, float* y) {
+  for (size_t i = 0; i < n; ++i) y[i] = ref::apply_act(x[i], act);
+}
+
+void f32_concat_rows__ref(int rows, int count, const float* const* xs, const int* widths,
+                          float* y) {
+  for (int r = 0; r < rows; ++r) {
+    for (int i = 0; i < count; ++i) {
+      std::memcpy(y, xs[i] + static_cast<size_t>(r) * widths[i], sizeof(float) * widths[i]);
+      y += widths[i];
+    }
+  }
+}
+
+}  // namespace aprt::kernels

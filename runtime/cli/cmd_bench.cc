@@ -1,0 +1,151 @@
+// aprt bench MODEL [--runs N] [--warmup N] [--json] [--profile] [--seed S]
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <random>
+#include <vector>
+
+#include "runtime/cli/args.h"
+#include "runtime/cli/commands.h"
+#include "runtime/common/allocation_counter.h"
+#include "runtime/engine/engine.h"
+
+namespace aprt::cli {
+namespace {
+
+double now_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return double(t.tv_sec) * 1e3 + double(t.tv_nsec) / 1e6;
+}
+
+double percentile(const std::vector<double>& sorted, double p) {
+  if (sorted.empty()) return 0.0;
+  const double pos = p * double(sorted.size() - 1);
+  const size_t lo = size_t(std::floor(pos));
+  const size_t hi = std::min(lo + 1, sorted.size() - 1);
+  return sorted[lo] + (sorted[hi] - sorted[lo]) * (pos - double(lo));
+}
+
+long peak_rss_kb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss;
+}
+
+}  // namespace
+
+int cmd_bench(int argc, char** argv) {
+  Args args(argc, argv);
+  if (args.flag("--help")) {
+    std::printf(
+        "usage: aprt bench MODEL [options]\n"
+        "  --runs N      timed runs (default 50)\n"
+        "  --warmup N    untimed runs first (default 5)\n"
+        "  --seed S      seed of the random input (default 1)\n"
+        "  --profile     time every op; print the ops that take the most time\n"
+        "  --json        one JSON object on stdout instead of text\n");
+    return 0;
+  }
+  const bool json = args.flag("--json");
+  const bool profile = args.flag("--profile");
+  const long runs = args.integer("--runs", 50, 1, 1000000);
+  const long warmup = args.integer("--warmup", 5, 0, 1000000);
+  const long seed = args.integer("--seed", 1, 0, 1L << 30);
+  const char* path = args.positional();
+  if (args.error() || !path || args.leftover()) {
+    std::fprintf(stderr, "aprt bench: %s%s\n",
+                 args.error() ? "bad or missing value for " : "usage: aprt bench MODEL [options]",
+                 args.error() ? args.error() : "");
+    return 2;
+  }
+  auto loaded = Engine::load_file(path);
+  if (!loaded) {
+    std::fprintf(stderr, "aprt bench: %s\n", loaded.error().message());
+    return 2;
+  }
+  Engine& e = *loaded.value();
+  std::mt19937 rng(static_cast<uint32_t>(seed));
+  std::normal_distribution<float> normal(0.0f, 1.0f);
+  Tensor& in = e.input();
+  for (size_t i = 0; i < in.numel; ++i) in.f32()[i] = normal(rng);
+
+  std::vector<double> ms(static_cast<size_t>(runs));
+  std::vector<uint64_t> op_ns(e.op_count(), 0), op_total(e.op_count(), 0);
+  for (long i = 0; i < warmup; ++i) (void)e.run();
+  const AllocationScope allocations;
+  for (long i = 0; i < runs; ++i) {
+    const double t0 = now_ms();
+    if (profile) {
+      (void)e.run_profiled(op_ns.data());
+      for (size_t k = 0; k < op_ns.size(); ++k) op_total[k] += op_ns[k];
+    } else {
+      (void)e.run();
+    }
+    ms[size_t(i)] = now_ms() - t0;
+  }
+  const uint64_t allocs = allocations.count();
+  std::vector<double> sorted = ms;
+  std::sort(sorted.begin(), sorted.end());
+  const double med = percentile(sorted, 0.5), p99 = percentile(sorted, 0.99);
+  const MemoryReport& r = e.memory();
+  const double gflops = double(e.total_flops()) / 1e9;
+  if (json) {
+    std::printf(
+        "{\"model\": \"%s\", \"runs\": %ld, \"warmup\": %ld, \"min_ms\": %.4f, \"median_ms\": "
+        "%.4f, \"p99_ms\": %.4f, \"max_ms\": %.4f, \"allocations_during_runs\": %llu, "
+        "\"allocations_cover_malloc\": %s, \"arena_bytes\": %zu, \"weight_bytes\": %zu, "
+        "\"scratch_bytes\": %zu, \"total_bytes\": %zu, \"memory_locked\": %s, "
+        "\"peak_rss_kb\": %ld, \"gflop_per_frame\": %.4f, \"gflops\": %.3f, \"threads\": 1}\n",
+        path, runs, warmup, sorted.front(), med, p99, sorted.back(),
+        static_cast<unsigned long long>(allocs),
+        allocation_counter_covers_malloc() ? "true" : "false", r.arena_bytes, r.weight_bytes,
+        r.scratch_bytes, r.total_bytes, r.locked ? "true" : "false", peak_rss_kb(), gflops,
+        gflops / (med / 1e3));
+  } else {
+    std::printf("model        %s\n", path);
+    std::printf("runs         %ld after %ld warm-up, 1 thread\n", runs, warmup);
+    std::printf("latency      min %.3f  median %.3f  p99 %.3f  max %.3f ms\n", sorted.front(), med,
+                p99, sorted.back());
+    std::printf("throughput   %.2f GFLOP/s (%.3f GFLOP per frame)\n", gflops / (med / 1e3),
+                gflops);
+    std::printf("allocations  %llu during the timed runs%s\n",
+                static_cast<unsigned long long>(allocs),
+                allocation_counter_covers_malloc() ? "" : " (operator new only: sanitizer build)");
+    std::printf("memory       arena %.3f MB, weights %.2f MB, scratch %.3f MB, total %.2f MB%s; "
+                "peak RSS %.1f MB\n",
+                double(r.arena_bytes) / 1e6, double(r.weight_bytes) / 1e6,
+                double(r.scratch_bytes) / 1e6, double(r.total_bytes) / 1e6,
+                r.locked ? " (locked)" : " (not locked: raise ulimit -l)",
+                double(peak_rss_kb()) / 1e3);
+  }
+  if (profile && !json) {
+    std::vector<size_t> order(e.op_count());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return op_total[a] > op_total[b]; });
+    uint64_t all = 0;
+    for (uint64_t t : op_total) all += t;
+    double by_kind[format::kMaxOpCode + 1] = {};
+    for (size_t i = 0; i < e.op_count(); ++i) by_kind[int(e.op(i).code)] += double(op_total[i]);
+    std::printf("\nper op kind (share of op time)\n");
+    for (int c = 1; c <= format::kMaxOpCode; ++c) {
+      if (by_kind[c] > 0) {
+        std::printf("  %-15s %5.1f %%  %8.3f ms\n", format::op_name(format::OpCode(c)),
+                    100.0 * by_kind[c] / double(all), by_kind[c] / 1e6 / double(runs));
+      }
+    }
+    std::printf("\nslowest ops (mean ms, GFLOP/s)\n");
+    for (size_t k = 0; k < std::min<size_t>(15, order.size()); ++k) {
+      const OpNode& n = e.op(order[k]);
+      const double t = double(op_total[order[k]]) / 1e6 / double(runs);
+      std::printf("  %4zu %-14s %8.3f ms %7.2f  %s\n", order[k], format::op_name(n.code), t,
+                  t > 0 ? double(n.flops) / 1e6 / t : 0.0, n.name);
+    }
+  }
+  return 0;
+}
+
+}  // namespace aprt::cli

@@ -1,0 +1,109 @@
+// aprt info MODEL [--ops] [--json]
+#include <cstdio>
+#include <cstring>
+
+#include "runtime/cli/args.h"
+#include "runtime/cli/commands.h"
+#include "runtime/engine/engine.h"
+
+namespace aprt::cli {
+namespace {
+
+void shape_text(const Tensor& t, char* buf, size_t n) {
+  size_t used = 0;
+  buf[0] = '\0';
+  for (int d = 0; d < t.rank && used < n; ++d) {
+    used += size_t(std::snprintf(buf + used, n - used, "%s%d", d ? "x" : "", t.dims[d]));
+  }
+}
+
+const char* resize_text(format::ResizePolicy p) {
+  return p == format::ResizePolicy::kStretch ? "stretch to square"
+                                             : "shorter side to size, centre crop";
+}
+
+}  // namespace
+
+int cmd_info(int argc, char** argv) {
+  Args args(argc, argv);
+  if (args.flag("--help")) {
+    std::printf("usage: aprt info MODEL [--ops]\n  --ops   list every op with its shapes\n");
+    return 0;
+  }
+  const bool list_ops = args.flag("--ops");
+  const char* path = args.positional();
+  if (!path || args.leftover()) {
+    std::fprintf(stderr, "aprt info: %s\n",
+                 path ? "unexpected argument" : "missing MODEL (usage: aprt info MODEL)");
+    return 2;
+  }
+  EngineOptions opts;
+  opts.lock_memory = false;
+  auto loaded = Engine::load_file(path, opts);
+  if (!loaded) {
+    std::fprintf(stderr, "aprt info: %s\n", loaded.error().message());
+    return 2;
+  }
+  const Engine& e = *loaded.value();
+  const ModelMeta& m = e.meta();
+  const ModelFile& f = e.model();
+  std::printf("model        %s\n", path);
+  std::printf("format       model_bin %u.%u, %.2f MB, produced by %s\n", f.version_major(),
+              f.version_minor(), double(f.file_bytes()) / 1e6, m.producer);
+  std::printf("source       %s sha256 ", m.source_name[0] ? m.source_name : "?");
+  for (uint8_t b : m.source_sha256) std::printf("%02x", b);
+  std::printf("\n");
+  std::printf("modality     %s, input %ux%ux%ux%u (NHWC f32)\n",
+              format::modality_name(m.modality), m.input_shape[0], m.input_shape[1],
+              m.input_shape[2], m.input_shape[3]);
+  std::printf("normalise    mean (");
+  for (int c = 0; c < m.norm_channels; ++c) std::printf("%s%.4g", c ? ", " : "", m.norm_mean[c]);
+  std::printf(") std (");
+  for (int c = 0; c < m.norm_channels; ++c) std::printf("%s%.4g", c ? ", " : "", m.norm_std[c]);
+  std::printf("), %s\n", resize_text(m.resize_policy));
+  std::printf("network      %s, d_model %u, %u heads, %u encoder + %u decoder layers, "
+              "feed-forward %u\n",
+              m.backbone[0] ? m.backbone : "?", m.d_model, m.nheads, m.enc_layers, m.dec_layers,
+              m.dim_feedforward);
+  std::printf("pose bounds  min (%.3f, %.3f, %.3f) max (%.3f, %.3f, %.3f) m\n", m.pose_min[0],
+              m.pose_min[1], m.pose_min[2], m.pose_max[0], m.pose_max[1], m.pose_max[2]);
+  if (m.has_val_error) {
+    std::printf("validation   median error %.3f m, %.3f deg\n", m.val_error_position_m,
+                m.val_error_orientation_deg);
+  } else {
+    std::printf("validation   no measured error in the file\n");
+  }
+  int counts[format::kMaxOpCode + 1] = {};
+  for (size_t i = 0; i < e.op_count(); ++i) counts[int(e.op(i).code)]++;
+  std::printf("ops          %zu:", e.op_count());
+  for (int c = 1; c <= format::kMaxOpCode; ++c) {
+    if (counts[c]) std::printf(" %s %d", format::op_name(format::OpCode(c)), counts[c]);
+  }
+  std::printf("\n");
+  std::printf("compute      %.3f G multiply-adds per frame\n", double(e.total_flops()) / 2e9);
+  const MemoryReport& r = e.memory();
+  size_t n_const = 0;
+  for (size_t i = 0; i < e.tensor_count(); ++i) n_const += e.tensor(i).is_const();
+  std::printf("tensors      %zu (%zu constants, %.2f MB weights)\n", e.tensor_count(), n_const,
+              double(r.weight_bytes) / 1e6);
+  std::printf("arena        %.3f MB planned; %.3f MB if every tensor had its own buffer; "
+              "%.3f MB liveness lower bound\n",
+              double(r.arena_bytes) / 1e6, double(r.arena_sum_bytes) / 1e6,
+              double(r.arena_lower_bound_bytes) / 1e6);
+  std::printf("memory       %.2f MB in one block (image %.2f + arena %.3f + scratch %.3f)\n",
+              double(r.total_bytes) / 1e6, double(r.image_bytes) / 1e6,
+              double(r.arena_bytes) / 1e6, double(r.scratch_bytes) / 1e6);
+  if (list_ops) {
+    std::printf("\n  #  op              MFLOP  output          name\n");
+    for (size_t i = 0; i < e.op_count(); ++i) {
+      const OpNode& n = e.op(i);
+      char shape[48];
+      shape_text(*n.out[0], shape, sizeof shape);
+      std::printf("%4zu %-14s %7.2f  %-15s %s\n", i, format::op_name(n.code),
+                  double(n.flops) / 1e6, shape, n.name);
+    }
+  }
+  return 0;
+}
+
+}  // namespace aprt::cli

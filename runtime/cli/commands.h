@@ -1,0 +1,10 @@
+// The `aprt` subcommands. Each returns a process exit code:
+// 0 success, 1 runtime failure, 2 usage error or bad input file.
+#pragma once
+
+namespace aprt::cli {
+
+int cmd_info(int argc, char** argv);
+int cmd_bench(int argc, char** argv);
+
+}  // namespace aprt::cli

@@ -1,0 +1,33 @@
+// aprt: the runtime's one binary.
+#include <cstdio>
+#include <cstring>
+
+#include "runtime/cli/commands.h"
+
+namespace {
+
+void usage(FILE* out) {
+  std::fprintf(out,
+               "usage: aprt <command> [options]\n"
+               "\n"
+               "commands:\n"
+               "  info MODEL     what a model file holds: metadata, ops, memory plan\n"
+               "  bench MODEL    latency and memory of a model on this machine\n"
+               "\n"
+               "Run 'aprt <command> --help' for the command's options.\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    usage(argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  const char* cmd = argv[1];
+  if (!std::strcmp(cmd, "info")) return aprt::cli::cmd_info(argc - 1, argv + 1);
+  if (!std::strcmp(cmd, "bench")) return aprt::cli::cmd_bench(argc - 1, argv + 1);
+  std::fprintf(stderr, "aprt: unknown command '%s'\n", cmd);
+  usage(stderr);
+  return 2;
+}

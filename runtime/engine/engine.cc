@@ -1,0 +1,289 @@
+#include "runtime/engine/engine.h"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdint>
+#include <cstring>
+#include <ctime>
+#include <new>
+
+#include "runtime/common/check.h"
+#include "runtime/engine/memory_planner.h"
+
+namespace aprt {
+namespace {
+
+constexpr size_t kAlign = 64;
+constexpr size_t kNotInArena = SIZE_MAX;
+constexpr uint64_t kMaxModelFileBytes = uint64_t(4) << 30;
+
+size_t round_up(size_t n, size_t a) { return (n + a - 1) / a * a; }
+
+bool in_arena(const Tensor& t) { return t.kind != format::TensorKind::kConst; }
+
+}  // namespace
+
+Engine::~Engine() {
+  if (region_ && region_owned_) {
+    if (memory_.locked) munlock(region_, region_bytes_);
+    munmap(region_, region_bytes_);
+  }
+}
+
+Status Engine::bind(const uint8_t* data, size_t size) {
+  auto parsed = ModelFile::parse(data, size, ParseOptions{.verify_checksums = false});
+  if (!parsed) return parsed.error();
+  model_ = std::move(parsed.value());
+  const auto& entries = model_.tensors();
+  tensors_.assign(entries.size(), Tensor{});
+  for (size_t i = 0; i < entries.size(); ++i) {
+    const TensorEntry& e = entries[i];
+    Tensor& t = tensors_[i];
+    t.name = e.name;
+    t.dtype = e.dtype;
+    t.kind = e.kind;
+    t.rank = e.rank;
+    for (int d = 0; d < e.rank; ++d) t.dims[d] = int(e.dims[d]);
+    t.numel = e.numel;
+    t.bytes = e.bytes;
+    t.scale = e.scale;
+    t.zero_point = e.zero_point;
+    if (t.is_const()) t.data = const_cast<uint8_t*>(model_.weights() + e.data_offset);
+  }
+  input_ = &tensors_[model_.input_index()];
+  output_ = &tensors_[model_.output_index()];
+  const auto& ops = model_.ops();
+  nodes_.assign(ops.size(), OpNode{});
+  for (size_t i = 0; i < ops.size(); ++i) {
+    const OpEntry& o = ops[i];
+    OpNode& n = nodes_[i];
+    n.index = int(i);
+    n.code = o.code;
+    n.name = o.name;
+    n.params = o.params;
+    n.n_in = o.n_in;
+    n.n_out = o.n_out;
+    for (int k = 0; k < o.n_in; ++k) n.in[k] = o.in[k] >= 0 ? &tensors_[o.in[k]] : nullptr;
+    for (int k = 0; k < o.n_out; ++k) n.out[k] = &tensors_[o.out[k]];
+  }
+  return ok();
+}
+
+Status Engine::prepare_ops() {
+  for (OpNode& n : nodes_) {
+    const OpKind* kind = find_op_kind(n.code);
+    APRT_ENSURE(kind != nullptr, Errc::kBadOp, "model_bin: op %d '%s': opcode %u not supported",
+                n.index, n.name, unsigned(n.code));
+    APRT_ENSURE(n.n_in >= kind->min_inputs && n.n_in <= kind->max_inputs, Errc::kBadOp,
+                "model_bin: op %d '%s' (%s) has %d inputs (%d..%d expected)", n.index, n.name,
+                kind->name, n.n_in, kind->min_inputs, kind->max_inputs);
+    APRT_ENSURE(n.n_out == 1, Errc::kBadOp, "model_bin: op %d '%s' (%s) has %d outputs", n.index,
+                n.name, kind->name, n.n_out);
+    if (Status s = kind->prepare(n); !s) return s;
+    APRT_ENSURE(n.eval != nullptr, Errc::kUnsupported,
+                "model_bin: op %d '%s' (%s): no kernel for this configuration", n.index, n.name,
+                kind->name);
+  }
+  return ok();
+}
+
+void Engine::plan(size_t* arena_bytes) {
+  const int n_ops = int(nodes_.size());
+  std::vector<PlanBuffer> buffers;
+  std::vector<int> owner;
+  std::vector<int> slot(tensors_.size(), -1);
+  for (size_t i = 0; i < tensors_.size(); ++i) {
+    if (!in_arena(tensors_[i])) continue;
+    slot[i] = int(buffers.size());
+    const bool is_input = tensors_[i].kind == format::TensorKind::kInput;
+    // Activations start "unwritten" (first = n_ops, last = -1) until an op writes them.
+    buffers.push_back(PlanBuffer{tensors_[i].bytes, is_input ? -1 : n_ops, -1, 0});
+    owner.push_back(int(i));
+  }
+  for (int k = 0; k < n_ops; ++k) {
+    const OpNode& n = nodes_[k];
+    for (int j = 0; j < n.n_out; ++j) {
+      PlanBuffer& b = buffers[slot[n.out[j] - tensors_.data()]];
+      b.first = k;
+      b.last = std::max(b.last, k);
+    }
+    for (int j = 0; j < n.n_in; ++j) {
+      if (!n.in[j] || !in_arena(*n.in[j])) continue;
+      PlanBuffer& b = buffers[slot[n.in[j] - tensors_.data()]];
+      b.last = std::max(b.last, k);
+    }
+  }
+  buffers[slot[output_ - tensors_.data()]].last = n_ops;  // read after run()
+  const PlanSummary s = plan_greedy_by_size(buffers.data(), int(buffers.size()), kAlign);
+  arena_offsets_.assign(tensors_.size(), kNotInArena);
+  for (size_t b = 0; b < buffers.size(); ++b) arena_offsets_[owner[b]] = buffers[b].offset;
+  *arena_bytes = s.arena_bytes;
+  memory_.arena_bytes = s.arena_bytes;
+  memory_.arena_sum_bytes = s.sum_bytes;
+  memory_.arena_lower_bound_bytes = s.lower_bound_bytes;
+}
+
+Expected<std::unique_ptr<Engine>> Engine::build(const uint8_t* data, size_t size,
+                                                const EngineOptions& options, bool plan_only,
+                                                size_t* required) {
+  std::unique_ptr<Engine> e(new (std::nothrow) Engine());
+  APRT_ENSURE(e != nullptr, Errc::kOutOfMemory, "engine: out of memory");
+  if (Status s = e->bind(data, size); !s) return s.error();
+  if (options.expect_modality != 0) {
+    const auto m = uint32_t(e->model_.meta().modality);
+    APRT_ENSURE(m == options.expect_modality, Errc::kWrongTarget,
+                "model_bin: model is for modality '%s', this runtime is configured for '%s'",
+                format::modality_name(e->model_.meta().modality),
+                format::modality_name(format::Modality(options.expect_modality)));
+  }
+  if (Status s = e->prepare_ops(); !s) return s.error();
+  size_t arena = 0;
+  e->plan(&arena);
+  size_t scratch_floats = 0;
+  for (const OpNode& n : e->nodes_) scratch_floats = std::max(scratch_floats, n.scratch_floats);
+  MemoryReport& m = e->memory_;
+  m.image_bytes = round_up(size, kAlign);
+  m.weight_bytes = 0;
+  for (const Tensor& t : e->tensors_) m.weight_bytes += t.is_const() ? t.bytes : 0;
+  m.scratch_bytes = round_up(scratch_floats * sizeof(float), kAlign);
+  m.total_bytes = m.image_bytes + round_up(arena, kAlign) + m.scratch_bytes;
+  if (required) *required = m.total_bytes;
+  (void)plan_only;  // both passes plan; only the caller decides what to keep
+  return e;
+}
+
+Expected<size_t> Engine::memory_required(const uint8_t* data, size_t size) {
+  // Validate with checksums, then plan.
+  auto checked = ModelFile::parse(data, size);
+  if (!checked) return checked.error();
+  size_t required = 0;
+  auto e = build(data, size, EngineOptions{}, true, &required);
+  if (!e) return e.error();
+  return required;
+}
+
+Expected<std::unique_ptr<Engine>> Engine::load_memory(const uint8_t* data, size_t size,
+                                                      const EngineOptions& options) {
+  // Pass 1 on the caller's bytes: validate everything (checksums included) and size.
+  auto checked = ModelFile::parse(data, size);
+  if (!checked) return checked.error();
+  size_t required = 0;
+  {
+    auto probe = build(data, size, options, true, &required);
+    if (!probe) return probe.error();
+  }
+  // Take the memory once.
+  uint8_t* region = nullptr;
+  bool owned = false;
+  if (options.memory) {
+    APRT_ENSURE(reinterpret_cast<uintptr_t>(options.memory) % kAlign == 0,
+                Errc::kInvalidArgument, "engine: caller memory must be %zu-byte aligned", kAlign);
+    APRT_ENSURE(options.memory_bytes >= required, Errc::kInvalidArgument,
+                "engine: caller memory has %zu bytes, the model needs %zu", options.memory_bytes,
+                required);
+    region = static_cast<uint8_t*>(options.memory);
+  } else {
+    void* p = mmap(nullptr, required, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    APRT_ENSURE(p != MAP_FAILED, Errc::kOutOfMemory, "engine: cannot map %zu bytes: %s",
+                required, std::strerror(errno));
+    region = static_cast<uint8_t*>(p);
+    owned = true;
+  }
+  std::memcpy(region, data, size);
+  // Pass 2 on the copy the engine keeps (identical bytes; no second checksum pass).
+  auto built = build(region, size, options, false, nullptr);
+  if (!built) {
+    if (owned) munmap(region, required);
+    return built.error();
+  }
+  std::unique_ptr<Engine> e = std::move(built.value());
+  e->region_ = region;
+  e->region_bytes_ = required;
+  e->region_owned_ = owned;
+  MemoryReport& m = e->memory_;
+  m.caller_memory = !owned;
+  uint8_t* arena = region + m.image_bytes;
+  for (size_t i = 0; i < e->tensors_.size(); ++i) {
+    if (e->arena_offsets_[i] != kNotInArena) e->tensors_[i].data = arena + e->arena_offsets_[i];
+  }
+  e->scratch_ = reinterpret_cast<float*>(arena + round_up(m.arena_bytes, kAlign));
+  // Prefault: every page of the arena and scratch is written once here, not during run().
+  std::memset(arena, 0, required - m.image_bytes);
+  if (options.lock_memory) {
+    if (mlock(region, required) == 0) {
+      m.locked = true;
+    } else {
+      m.lock_errno = errno;
+      APRT_ENSURE(!options.require_locked, Errc::kOutOfMemory,
+                  "engine: cannot lock %zu bytes in RAM (%s); raise RLIMIT_MEMLOCK (ulimit -l) "
+                  "or grant CAP_IPC_LOCK",
+                  required, std::strerror(errno));
+    }
+  }
+  return e;
+}
+
+Expected<std::unique_ptr<Engine>> Engine::load_file(const char* path,
+                                                    const EngineOptions& options) {
+  const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
+  APRT_ENSURE(fd >= 0, Errc::kIo, "model_bin: cannot open '%s': %s", path, std::strerror(errno));
+  struct stat st {};
+  if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    return Error(Errc::kIo, "model_bin: '%s' is not a regular file", path);
+  }
+  if (uint64_t(st.st_size) > kMaxModelFileBytes) {
+    ::close(fd);
+    return Error(Errc::kTooLarge, "model_bin: '%s' is %lld bytes (limit 4 GiB)", path,
+                 static_cast<long long>(st.st_size));
+  }
+  std::vector<uint8_t> bytes;
+  bytes.resize(size_t(st.st_size));
+  size_t got = 0;
+  while (got < bytes.size()) {
+    const ssize_t r = ::read(fd, bytes.data() + got, bytes.size() - got);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) break;
+    got += size_t(r);
+  }
+  ::close(fd);
+  APRT_ENSURE(got == bytes.size(), Errc::kIo, "model_bin: short read on '%s' (%zu of %zu bytes)",
+              path, got, bytes.size());
+  auto e = load_memory(bytes.data(), bytes.size(), options);
+  if (!e) {
+    Error err = e.error();
+    err.with_context("%s", path);
+    return err;
+  }
+  return e;
+}
+
+Status Engine::run() noexcept {
+  RunContext ctx{scratch_};
+  for (const OpNode& n : nodes_) n.eval(n, ctx);
+  return ok();
+}
+
+Status Engine::run_profiled(uint64_t* op_nanos) noexcept {
+  RunContext ctx{scratch_};
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    timespec a{}, b{};
+    clock_gettime(CLOCK_MONOTONIC, &a);
+    nodes_[i].eval(nodes_[i], ctx);
+    clock_gettime(CLOCK_MONOTONIC, &b);
+    op_nanos[i] = uint64_t(b.tv_sec - a.tv_sec) * 1000000000ull + uint64_t(b.tv_nsec - a.tv_nsec);
+  }
+  return ok();
+}
+
+uint64_t Engine::total_flops() const {
+  uint64_t f = 0;
+  for (const OpNode& n : nodes_) f += n.flops;
+  return f;
+}
+
+}  // namespace aprt

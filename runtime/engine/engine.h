@@ -1,0 +1,107 @@
+// The inference engine: load -> validate -> plan -> run.
+//
+// Engine::load() reads and validates a model_bin file, prepares every op,
+// plans the activation arena from tensor lifetimes and then takes all the
+// memory it will ever use in one piece (or uses the caller's buffer):
+//
+//   [ model image (weights, tables) | activation arena | scratch ]
+//
+// It prefaults and (best effort, or required) locks that memory. After load()
+// returns, run() allocates nothing, takes no locks, makes no system calls and
+// does a fixed amount of work; on one thread it is bit-for-bit deterministic.
+//
+// Thread safety: one Engine runs one frame at a time; input()/output() belong to
+// the thread calling run().
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "runtime/common/expected.h"
+#include "runtime/engine/model_file.h"
+#include "runtime/engine/op_node.h"
+#include "runtime/engine/tensor.h"
+
+namespace aprt {
+
+struct EngineOptions {
+  // Caller-owned memory for everything (64-byte aligned, at least
+  // Engine::memory_required() bytes); null to let load() map its own.
+  void* memory = nullptr;
+  size_t memory_bytes = 0;
+  bool lock_memory = true;     // mlock the working memory (best effort)
+  bool require_locked = false; // fail load() if mlock is refused
+  // If non-zero, refuse models of another modality (Errc::kWrongTarget).
+  uint32_t expect_modality = 0;
+};
+
+struct MemoryReport {
+  size_t image_bytes = 0;              // the model file as loaded (weights + tables)
+  size_t weight_bytes = 0;             // constant tensors
+  size_t arena_bytes = 0;              // activation arena as planned
+  size_t arena_sum_bytes = 0;          // sum of all activation tensors (no reuse)
+  size_t arena_lower_bound_bytes = 0;  // largest set of simultaneously live tensors
+  size_t scratch_bytes = 0;
+  size_t total_bytes = 0;
+  bool caller_memory = false;
+  bool locked = false;
+  int lock_errno = 0;
+};
+
+class Engine {
+ public:
+  static Expected<std::unique_ptr<Engine>> load_file(const char* path,
+                                                     const EngineOptions& options = {});
+  static Expected<std::unique_ptr<Engine>> load_memory(const uint8_t* data, size_t size,
+                                                       const EngineOptions& options = {});
+  // Bytes load_memory() needs for EngineOptions::memory.
+  static Expected<size_t> memory_required(const uint8_t* data, size_t size);
+
+  ~Engine();
+  Engine(const Engine&) = delete;
+  Engine& operator=(const Engine&) = delete;
+
+  // The input tensor: NHWC f32 [1, H, W, C], normalised as the metadata says.
+  Tensor& input() { return *input_; }
+  // The raw output: x y z (min-max normalised) qw qx qy qz (not normalised).
+  const Tensor& output() const { return *output_; }
+
+  // @rt: bounded by the model; no allocation, no locks, no system calls.
+  Status run() noexcept;
+  // As run(), recording each op's duration in nanoseconds into op_nanos[op_count()].
+  Status run_profiled(uint64_t* op_nanos) noexcept;
+
+  const ModelMeta& meta() const { return model_.meta(); }
+  const ModelFile& model() const { return model_; }
+  const MemoryReport& memory() const { return memory_; }
+  size_t op_count() const { return nodes_.size(); }
+  const OpNode& op(size_t i) const { return nodes_[i]; }
+  size_t tensor_count() const { return tensors_.size(); }
+  const Tensor& tensor(size_t i) const { return tensors_[i]; }
+  uint64_t total_flops() const;
+
+ private:
+  Engine() = default;
+  static Expected<std::unique_ptr<Engine>> build(const uint8_t* data, size_t size,
+                                                 const EngineOptions& options, bool plan_only,
+                                                 size_t* required);
+  Status bind(const uint8_t* data, size_t size);
+  Status prepare_ops();
+  void plan(size_t* arena_bytes);
+
+  ModelFile model_;
+  std::vector<Tensor> tensors_;
+  std::vector<OpNode> nodes_;
+  std::vector<size_t> arena_offsets_;  // per tensor; SIZE_MAX if not in the arena
+  Tensor* input_ = nullptr;
+  Tensor* output_ = nullptr;
+  uint8_t* region_ = nullptr;  // image | arena | scratch
+  size_t region_bytes_ = 0;
+  bool region_owned_ = false;
+  float* scratch_ = nullptr;
+  MemoryReport memory_;
+};
+
+}  // namespace aprt

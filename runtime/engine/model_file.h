@@ -1,0 +1,101 @@
+// A parsed and validated model_bin image (model_bin/FORMAT.md).
+//
+// ModelFile::parse() checks everything that can be checked without knowing
+// what an op computes: header, version, section table, checksums, metadata,
+// the tensor table, op records and the graph's order (every tensor defined
+// once, before it is read). Op-specific shape rules are checked by each op's
+// prepare() in the engine. Each refusal names the check that failed.
+//
+// The ModelFile points into the bytes it was parsed from; they must outlive it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "runtime/common/expected.h"
+#include "runtime/engine/model_format.h"
+
+namespace aprt {
+
+struct ModelMeta {
+  char producer[64] = {};
+  uint8_t source_sha256[32] = {};
+  char source_name[128] = {};
+  format::Modality modality = format::Modality::kImage;
+  uint32_t input_shape[4] = {};  // N, H, W, C
+  int norm_channels = 0;
+  float norm_mean[4] = {};
+  float norm_std[4] = {};
+  format::ResizePolicy resize_policy = format::ResizePolicy::kShorterThenCenterCrop;
+  float pose_min[3] = {};
+  float pose_max[3] = {};
+  char backbone[32] = {};
+  uint32_t d_model = 0, nheads = 0, enc_layers = 0, dec_layers = 0, dim_feedforward = 0;
+  bool has_val_error = false;
+  float val_error_position_m = 0.0f;
+  float val_error_orientation_deg = 0.0f;
+  const char* config_json = nullptr;  // points into the file; not NUL-terminated
+  size_t config_json_bytes = 0;
+};
+
+struct TensorEntry {
+  const char* name = "";
+  format::DType dtype = format::DType::kF32;
+  format::TensorKind kind = format::TensorKind::kActivation;
+  int rank = 0;
+  uint32_t dims[format::kMaxRank] = {};
+  uint64_t numel = 0;
+  uint64_t bytes = 0;
+  uint64_t data_offset = 0;  // within WGHT, constants only
+  float scale = 0.0f;        // per-tensor quantisation; 0 = not quantised
+  int32_t zero_point = 0;
+  int32_t qscale_tensor = -1;  // per-channel scales (f32 constant), or -1
+};
+
+struct OpEntry {
+  format::OpCode code = format::OpCode::kAdd;
+  const char* name = "";
+  int n_in = 0;
+  int n_out = 0;
+  int32_t in[format::kMaxOpInputs] = {};
+  int32_t out[format::kMaxOpOutputs] = {};
+  int32_t params[format::kMaxOpParams] = {};
+};
+
+struct ParseOptions {
+  bool verify_checksums = true;
+};
+
+class ModelFile {
+ public:
+  static Expected<ModelFile> parse(const uint8_t* data, size_t size,
+                                   const ParseOptions& options = {});
+
+  const ModelMeta& meta() const { return meta_; }
+  const std::vector<TensorEntry>& tensors() const { return tensors_; }
+  const std::vector<OpEntry>& ops() const { return ops_; }
+  const uint8_t* weights() const { return weights_; }
+  uint64_t weights_bytes() const { return weights_bytes_; }
+  uint64_t file_bytes() const { return file_bytes_; }
+  uint16_t version_major() const { return version_major_; }
+  uint16_t version_minor() const { return version_minor_; }
+  int input_index() const { return input_; }
+  int output_index() const { return output_; }
+
+ private:
+  ModelMeta meta_;
+  std::vector<TensorEntry> tensors_;
+  std::vector<OpEntry> ops_;
+  const uint8_t* weights_ = nullptr;
+  uint64_t weights_bytes_ = 0;
+  uint64_t file_bytes_ = 0;
+  uint16_t version_major_ = 0;
+  uint16_t version_minor_ = 0;
+  int input_ = -1;
+  int output_ = -1;
+
+  friend class ModelFileParser;
+};
+
+}  // namespace aprt

@@ -1,0 +1,35 @@
+// Helpers for ops' prepare(): uniform, specific error messages.
+#pragma once
+
+#include <cmath>
+#include <cstring>
+
+#include "runtime/common/check.h"
+#include "runtime/engine/op_node.h"
+
+namespace aprt::ops {
+
+Error op_error(const OpNode& node, Errc code, const char* format, ...)
+    __attribute__((format(printf, 3, 4)));
+
+#define APRT_OP_ENSURE(node, cond, code, ...)                        \
+  do {                                                               \
+    if (!(cond)) return ::aprt::ops::op_error(node, code, __VA_ARGS__); \
+  } while (0)
+
+// Tensor `role` of `node` is f32, present, and (if `want_const`) a constant.
+Status expect_f32(const OpNode& node, const Tensor* t, const char* role, bool want_const);
+
+// `t` has exactly `rank` dims equal to `dims` (-1 = any).
+Status expect_dims(const OpNode& node, const Tensor* t, const char* role, int rank,
+                   const int* dims);
+
+inline float param_f32(const OpNode& node, int i) {
+  float f;
+  std::memcpy(&f, &node.params[i], sizeof f);
+  return f;
+}
+
+Status expect_act(const OpNode& node, int32_t act);
+
+}  // namespace aprt::ops

@@ -1,0 +1,18 @@
+// prepare() of every op kind (each file in this folder implements one or a few).
+#pragma once
+
+#include "runtime/engine/op_node.h"
+
+namespace aprt::ops {
+
+Status prepare_conv2d(OpNode& node);
+Status prepare_dwconv2d(OpNode& node);
+Status prepare_linear(OpNode& node);
+Status prepare_squeeze_excite(OpNode& node);
+Status prepare_add(OpNode& node);
+Status prepare_layernorm(OpNode& node);
+Status prepare_attention(OpNode& node);
+Status prepare_activation(OpNode& node);
+Status prepare_concat(OpNode& node);
+
+}  // namespace aprt::ops

@@ -1,0 +1,3 @@
+"""aprt's offline tools: reference model, export, conversion, golden data."""
+
+__version__ = "0.1.0"

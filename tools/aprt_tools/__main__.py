@@ -1,0 +1,114 @@
+"""Command line: python3 -m aprt_tools <command> ... (see --help)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from .model_bin import spec
+
+
+def _floats(text: str) -> list:
+    return [float(v) for v in text.split(",")]
+
+
+def cmd_golden(a):
+    from .golden import make_golden
+    from .model.apr_transformer import AprConfig
+
+    cfg = AprConfig.named(a.config, a.size)
+    m = make_golden(cfg, a.out, seed=a.seed, opset=a.opset, count=a.count)
+    print(f"golden: {a.config} {cfg.image_size}x{cfg.image_size} opset {a.opset} -> {a.out} "
+          f"(relative output spread {m['min_relative_spread']:.2f})")
+    if a.convert:
+        a.onnx, a.output = f"{a.out}/model.onnx", f"{a.out}/model.aprt"
+        a.config_json = f"{a.out}/model.json"
+        cmd_convert(a)
+
+
+def cmd_export(a):
+    import torch
+
+    from .export import export_onnx
+    from .model.apr_transformer import AprConfig, AprTransformer
+
+    cfg = AprConfig.from_json(open(a.config_json).read()) if a.config_json else \
+        AprConfig.named(a.config, a.size)
+    model = AprTransformer(cfg)
+    if a.weights:
+        state = torch.load(a.weights, map_location="cpu")
+        state = state.get("model_state_dict", state.get("state_dict", state))
+        model.load_state_dict(state, strict=True)
+    with open(a.output, "wb") as f:
+        f.write(export_onnx(model, a.opset))
+    with open(a.output.rsplit(".", 1)[0] + ".json", "w") as f:
+        f.write(cfg.to_json())
+    print(f"export: {a.output} (opset {a.opset}, input 1x{cfg.in_channels}x{cfg.image_size}x"
+          f"{cfg.image_size})")
+
+
+def cmd_convert(a):
+    from .convert.convert import convert
+    from .onnx.evaluate import UnsupportedOnnx
+
+    config = json.load(open(a.config_json)) if getattr(a, "config_json", None) else None
+    overrides = dict(pose_min=getattr(a, "pose_min", None), pose_max=getattr(a, "pose_max", None),
+                     norm_mean=getattr(a, "mean", None), norm_std=getattr(a, "std", None))
+    if config is None and getattr(a, "imagenet", False):
+        overrides.setdefault("norm_mean", None)
+        from .model.apr_transformer import IMAGENET_MEAN, IMAGENET_STD
+
+        overrides["norm_mean"] = overrides["norm_mean"] or list(IMAGENET_MEAN)
+        overrides["norm_std"] = overrides["norm_std"] or list(IMAGENET_STD)
+    try:
+        blob, report = convert(open(a.onnx, "rb").read(), source_name=a.onnx.rsplit("/", 1)[-1],
+                               config=config, overrides=overrides)
+    except UnsupportedOnnx as e:
+        print(f"convert: {a.onnx}: {e}", file=sys.stderr)
+        sys.exit(2)
+    with open(a.output, "wb") as f:
+        f.write(blob)
+    print(f"convert: {a.output}: {report.text()}")
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="python3 -m aprt_tools", description=__doc__)
+    sub = p.add_subparsers(dest="cmd", required=True)
+
+    g = sub.add_parser("golden", help="write a varied-weight model, its ONNX, inputs and outputs")
+    g.add_argument("--config", default="tiny", choices=("tiny", "full"))
+    g.add_argument("--size", type=int, help="input side (default: the configuration's)")
+    g.add_argument("--opset", type=int, default=13, choices=(13, 17))
+    g.add_argument("--seed", type=int, default=1)
+    g.add_argument("--count", type=int, default=3, help="number of inputs")
+    g.add_argument("--convert", action="store_true", help="also write model.aprt")
+    g.add_argument("--out", required=True)
+    g.set_defaults(fn=cmd_golden)
+
+    e = sub.add_parser("export", help="export the reference model (optionally a checkpoint)")
+    e.add_argument("--config", default="full", choices=("tiny", "full"))
+    e.add_argument("--config-json", help="configuration file written by export/train")
+    e.add_argument("--size", type=int)
+    e.add_argument("--weights", help="PyTorch checkpoint (upstream or ours), loaded strictly")
+    e.add_argument("--opset", type=int, default=13, choices=(13, 17))
+    e.add_argument("-o", "--output", required=True)
+    e.set_defaults(fn=cmd_export)
+
+    c = sub.add_parser("convert", help="ONNX -> model_bin")
+    c.add_argument("onnx")
+    c.add_argument("-o", "--output", required=True)
+    c.add_argument("--config-json", help="the .json written next to the ONNX by export/golden")
+    c.add_argument("--pose-min", type=_floats, help="x,y,z lower position bound (metres)")
+    c.add_argument("--pose-max", type=_floats, help="x,y,z upper position bound (metres)")
+    c.add_argument("--mean", type=_floats, help="per-channel normalisation mean")
+    c.add_argument("--std", type=_floats, help="per-channel normalisation std")
+    c.add_argument("--imagenet", action="store_true", help="ImageNet mean/std (image models)")
+    c.set_defaults(fn=cmd_convert)
+
+    a = p.parse_args(argv)
+    a.fn(a)
+
+
+if __name__ == "__main__":
+    main()

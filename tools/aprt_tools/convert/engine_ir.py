@@ -1,0 +1,171 @@
+"""The engine's graph as the converter builds it, and what each op computes.
+
+Layouts: feature maps are NHWC ([1, H, W, C]); token matrices are row-major
+with the feature axis last. `run()` below is the numpy statement of every
+op's semantics; the C++ reference kernels in kernels/ref/ implement the same
+and the converter checks each lowered graph against ONNX with it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+
+from ..model_bin import spec
+
+
+@dataclass(eq=False)
+class Tensor:
+    name: str
+    shape: tuple
+    kind: int = spec.KIND_ACTIVATION
+    data: np.ndarray | None = None  # constants only, already in engine layout
+    dtype: int = spec.DTYPE_F32
+
+    @property
+    def numel(self) -> int:
+        return int(np.prod(self.shape))
+
+
+@dataclass(eq=False)
+class Op:
+    code: int
+    name: str
+    inputs: list  # Tensor objects or None
+    outputs: list
+    params: dict = field(default_factory=dict)
+
+    def __repr__(self):
+        return f"{spec.OP_NAMES[self.code]}({self.name})"
+
+
+@dataclass
+class EngineGraph:
+    tensors: list = field(default_factory=list)
+    ops: list = field(default_factory=list)
+
+    def add(self, t: Tensor) -> Tensor:
+        self.tensors.append(t)
+        return t
+
+    def const(self, name: str, data: np.ndarray) -> Tensor:
+        data = np.ascontiguousarray(data, dtype=np.float32)
+        return self.add(Tensor(name, tuple(data.shape), spec.KIND_CONST, data))
+
+    def producer(self, t: Tensor):
+        return next((op for op in self.ops if t in op.outputs), None)
+
+    def users(self, t: Tensor) -> list:
+        return [op for op in self.ops if t in op.inputs]
+
+    def prune(self):
+        """Drop tensors nothing references."""
+        used = {id(t) for op in self.ops for t in op.inputs + op.outputs if t is not None}
+        self.tensors = [t for t in self.tensors if id(t) in used or t.kind in
+                        (spec.KIND_INPUT, spec.KIND_OUTPUT)]
+
+
+# ---------------------------------------------------------------------------
+# Semantics.
+
+
+def activation(x: np.ndarray, act: int) -> np.ndarray:
+    if act == spec.ACT_NONE:
+        return x
+    if act == spec.ACT_SILU:
+        return x / (1.0 + np.exp(-x))
+    if act == spec.ACT_GELU:
+        return 0.5 * x * (1.0 + torch.erf(torch.from_numpy(x / np.sqrt(2.0))).numpy())
+    if act == spec.ACT_SIGMOID:
+        return 1.0 / (1.0 + np.exp(-x))
+    if act == spec.ACT_RELU:
+        return np.maximum(x, 0)
+    raise ValueError(f"activation {act}")
+
+
+def conv2d_nhwc(x, w, b, stride, pads, depthwise):
+    """x [1,H,W,C]; w [Co,KH,KW,Ci] or [KH,KW,C] (depthwise); pads (t, l, b, r)."""
+    t = torch.from_numpy(np.ascontiguousarray(x.transpose(0, 3, 1, 2), dtype=np.float64))
+    t = torch.nn.functional.pad(t, (pads[1], pads[3], pads[0], pads[2]))
+    if depthwise:
+        wt = torch.from_numpy(np.ascontiguousarray(w.transpose(2, 0, 1)[:, None], np.float64))
+        groups = w.shape[2]
+    else:
+        wt = torch.from_numpy(np.ascontiguousarray(w.transpose(0, 3, 1, 2), np.float64))
+        groups = 1
+    y = torch.nn.functional.conv2d(t, wt, torch.from_numpy(b.astype(np.float64)),
+                                   stride=tuple(stride), groups=groups)
+    return y.numpy().transpose(0, 2, 3, 1)
+
+
+def run_op(op: Op, get) -> list:
+    """Evaluate one op in float64; `get(tensor)` returns an input's value."""
+    p = op.params
+    ins = [None if t is None else np.asarray(get(t), np.float64) for t in op.inputs]
+    c = op.code
+    if c in (spec.OP_CONV2D, spec.OP_DWCONV2D):
+        x, w, b = ins[0], ins[1], ins[2]
+        y = conv2d_nhwc(x, w, b, p["stride"], p["pads"], c == spec.OP_DWCONV2D)
+        y = activation(y, p.get("act", 0))
+        if len(ins) > 3 and ins[3] is not None:
+            y = y + ins[3].reshape(y.shape)
+    elif c == spec.OP_LINEAR:
+        x, w, b = ins[0], ins[1], ins[2]
+        k = w.shape[1]
+        y = x.reshape(-1, k) @ w.T + b
+        y = activation(y, p.get("act", 0))
+        if len(ins) > 3 and ins[3] is not None:
+            y = y + ins[3].reshape(y.shape)
+    elif c == spec.OP_SQUEEZE_EXCITE:
+        x, w1, b1, w2, b2 = ins
+        s = x.mean(axis=(1, 2)).reshape(-1)
+        r = activation(w1 @ s + b1, spec.ACT_SILU)
+        e = activation(w2 @ r + b2, spec.ACT_SIGMOID)
+        y = x * e.reshape(1, 1, 1, -1)
+    elif c == spec.OP_ADD:
+        y = ins[0] + ins[1].reshape(ins[0].shape)
+    elif c == spec.OP_LAYERNORM:
+        x, gamma, beta = ins
+        n = gamma.shape[0]
+        r = x.reshape(-1, n)
+        mean = r.mean(axis=1, keepdims=True)
+        var = ((r - mean) ** 2).mean(axis=1, keepdims=True)
+        y = (r - mean) / np.sqrt(var + p["eps"]) * gamma + beta
+    elif c == spec.OP_ATTENTION:
+        q, k, v = ins
+        h = p["heads"]
+        e = op.inputs[0].shape[-1]
+        d = e // h
+        q = q.reshape(-1, h, d).transpose(1, 0, 2)
+        k = k.reshape(-1, h, d).transpose(1, 0, 2)
+        v = v.reshape(-1, h, d).transpose(1, 0, 2)
+        s = (q @ k.transpose(0, 2, 1)) * p["scale"]
+        s = np.exp(s - s.max(axis=-1, keepdims=True))
+        s /= s.sum(axis=-1, keepdims=True)
+        y = (s @ v).transpose(1, 0, 2).reshape(-1, e)
+    elif c == spec.OP_ACTIVATION:
+        y = activation(ins[0], p["act"])
+    elif c == spec.OP_CONCAT:
+        m = int(np.prod(op.outputs[0].shape[:-1]))
+        y = np.concatenate([x.reshape(m, -1) for x in ins], axis=1)
+    else:
+        raise ValueError(f"no semantics for op {op}")
+    return [y.reshape(op.outputs[0].shape)]
+
+
+def run(graph: EngineGraph, feeds: dict, keep_all: bool = True) -> dict:
+    """Run the graph; `feeds` maps input Tensor -> array. Returns Tensor id -> value."""
+    vals = {id(t): np.asarray(v) for t, v in feeds.items()}
+    for t in graph.tensors:
+        if t.kind == spec.KIND_CONST:
+            vals[id(t)] = t.data
+
+    def get(t):
+        return vals[id(t)]
+
+    for op in graph.ops:
+        for t, v in zip(op.outputs, run_op(op, get)):
+            vals[id(t)] = v
+    return vals

@@ -1,0 +1,54 @@
+"""Golden data: a model with varied weights, its ONNX, inputs and PyTorch outputs.
+
+Inputs are NCHW float32, already normalised (what the network sees), written
+raw little-endian; outputs are the 7 pose values. A manifest records the
+configuration and how much the outputs vary across the inputs, which must be
+far more than any tolerance a test uses.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import torch
+
+from .export import export_onnx
+from .model.apr_transformer import AprConfig, AprTransformer
+from .model.weights import smooth_images, vary
+
+MIN_SPREAD = 0.05  # std across inputs / mean magnitude, per output, at least
+
+
+def make_golden(cfg: AprConfig, out_dir: str, *, seed: int = 1, opset: int = 13,
+                count: int = 3) -> dict:
+    os.makedirs(out_dir, exist_ok=True)
+    torch.manual_seed(seed)
+    model = vary(AprTransformer(cfg), seed)
+    onnx_bytes = export_onnx(model, opset)
+    with open(os.path.join(out_dir, "model.onnx"), "wb") as f:
+        f.write(onnx_bytes)
+    with open(os.path.join(out_dir, "model.json"), "w") as f:
+        f.write(cfg.to_json())
+    gen = torch.Generator().manual_seed(seed + 1000)
+    inputs = [torch.randn(1, cfg.in_channels, cfg.image_size, cfg.image_size, generator=gen)]
+    inputs += [smooth_images(1, cfg.in_channels, cfg.image_size, gen) for _ in range(count - 1)]
+    outs = []
+    with torch.no_grad():
+        for k, x in enumerate(inputs):
+            y = model(x)
+            x.numpy().astype("<f4").tofile(os.path.join(out_dir, f"in_{k}.f32"))
+            y.numpy().astype("<f4").tofile(os.path.join(out_dir, f"out_{k}.f32"))
+            outs.append(y.numpy().reshape(-1))
+    outs = np.stack(outs)
+    spread = float((outs.std(axis=0) / (np.abs(outs).mean(axis=0) + 1e-9)).min())
+    manifest = dict(config=json.loads(cfg.to_json()), seed=seed, opset=opset, count=count,
+                    input_shape=[1, cfg.in_channels, cfg.image_size, cfg.image_size],
+                    min_relative_spread=spread, outputs=outs.tolist())
+    with open(os.path.join(out_dir, "golden.json"), "w") as f:
+        json.dump(manifest, f, indent=1)
+    if count > 1 and spread < MIN_SPREAD:
+        raise RuntimeError(f"outputs barely vary across inputs (relative spread {spread:.3f} < "
+                           f"{MIN_SPREAD}): the golden data would prove nothing")
+    return manifest

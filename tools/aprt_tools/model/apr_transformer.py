@@ -1,0 +1,154 @@
+"""APR-Transformer, image modality (DESIGN.md section 4.1).
+
+Two branches share one EfficientNet trunk: the stride-16 map (reduction_4)
+feeds the position transformer, the stride-8 map (reduction_3) the
+orientation transformer. Each branch decodes one learned query; an MLP head
+regresses (x, y, z) min-max normalised and (qw, qx, qy, qz) unnormalised.
+The state_dict keys equal upstream's (GT-ARC/APR-Transformer).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass, field
+
+import torch
+from torch import nn
+from torch.nn import functional as F
+
+from .efficientnet import EfficientNet
+from .transformer import Transformer
+
+IMAGENET_MEAN = (0.485, 0.456, 0.406)
+IMAGENET_STD = (0.229, 0.224, 0.225)
+
+
+@dataclass
+class AprConfig:
+    """Everything that fixes the network's shape; stored in model_bin metadata."""
+    backbone: str = "efficientnet-b0"
+    image_size: int = 224
+    in_channels: int = 3
+    hidden_dim: int = 256
+    nheads: int = 8
+    dim_feedforward: int = 256
+    enc_layers: int = 6
+    dec_layers: int = 6
+    head_dim: int = 1024  # width of the regressor MLPs
+    pos_embed_cells: int = 50  # rows/cols of the learned position tables
+    mean: tuple = IMAGENET_MEAN
+    std: tuple = IMAGENET_STD
+    # Training-set position bounds for min-max normalisation (metres).
+    pose_min: tuple = (0.0, 0.0, 0.0)
+    pose_max: tuple = (1.0, 1.0, 1.0)
+    extra: dict = field(default_factory=dict)
+
+    @staticmethod
+    def named(name: str, image_size: int | None = None) -> "AprConfig":
+        """Preset configurations: 'full' (upstream DeepLoc) and 'tiny' (tests)."""
+        if name == "full":
+            cfg = AprConfig()
+        elif name == "tiny":
+            # Same trunk, a transformer small enough for second-long tests;
+            # matches the upstream tiny sample in tests/golden/upstream.
+            cfg = AprConfig(hidden_dim=32, nheads=8, dim_feedforward=32, enc_layers=1,
+                            dec_layers=1, image_size=64)
+        else:
+            raise ValueError(f"unknown configuration {name!r} (full, tiny)")
+        if image_size is not None:
+            cfg.image_size = image_size
+        return cfg
+
+    def to_json(self) -> str:
+        return json.dumps(dataclasses.asdict(self), indent=1)
+
+    @staticmethod
+    def from_json(text: str) -> "AprConfig":
+        d = json.loads(text)
+        for k in ("mean", "std", "pose_min", "pose_max"):
+            if k in d:
+                d[k] = tuple(d[k])
+        return AprConfig(**d)
+
+
+class Backbone(nn.Module):
+    def __init__(self, cfg: AprConfig):
+        super().__init__()
+        self.body = EfficientNet(cfg.backbone, cfg.image_size)
+        if cfg.in_channels != 3:  # LiDAR BEV: same trunk, other stem width
+            stem = self.body._conv_stem
+            self.body._conv_stem = type(stem)(cfg.in_channels, stem.out_channels, 3, 2,
+                                              image_size=(cfg.image_size, cfg.image_size))
+
+
+class PositionEmbeddingLearned(nn.Module):
+    """DETR's learned absolute position: column table ++ row table, 128 + 128."""
+
+    def __init__(self, cells: int, d_model: int):
+        super().__init__()
+        self.row_embed = nn.Embedding(cells, d_model // 2)
+        self.col_embed = nn.Embedding(cells, d_model // 2)
+        nn.init.uniform_(self.row_embed.weight)
+        nn.init.uniform_(self.col_embed.weight)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        h, w = x.shape[-2:]
+        if h > self.row_embed.num_embeddings or w > self.col_embed.num_embeddings:
+            raise ValueError(f"feature map {h}x{w} exceeds the {self.row_embed.num_embeddings}"
+                             "-cell position tables")
+        cols = self.col_embed(torch.arange(w, device=x.device))
+        rows = self.row_embed(torch.arange(h, device=x.device))
+        pos = torch.cat([cols.unsqueeze(0).repeat(h, 1, 1), rows.unsqueeze(1).repeat(1, w, 1)],
+                        dim=-1)
+        return pos.permute(2, 0, 1).unsqueeze(0).repeat(x.shape[0], 1, 1, 1)
+
+
+class Joiner(nn.Sequential):
+    """Holds the trunk at index 0 and the position tables at index 1 (upstream layout)."""
+
+
+class PoseRegressor(nn.Module):
+    def __init__(self, d_model: int, out_dim: int, hidden: int = 1024):
+        super().__init__()
+        self.fc_h = nn.Linear(d_model, hidden)
+        self.fc_o = nn.Linear(hidden, out_dim)
+        for p in self.parameters():
+            if p.dim() > 1:
+                nn.init.xavier_uniform_(p)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.fc_o(F.gelu(self.fc_h(x)))
+
+
+class AprTransformer(nn.Module):
+    def __init__(self, cfg: AprConfig):
+        super().__init__()
+        self.cfg = cfg
+        self.backbone = Joiner(Backbone(cfg), PositionEmbeddingLearned(cfg.pos_embed_cells,
+                                                                      cfg.hidden_dim))
+        ch_rot, ch_t = self.backbone[0].body.endpoint_channels()
+
+        def transformer():
+            return Transformer(cfg.hidden_dim, cfg.nheads, cfg.enc_layers, cfg.dec_layers,
+                               cfg.dim_feedforward)
+
+        self.transformer_t = transformer()
+        self.transformer_rot = transformer()
+        self.input_proj_t = nn.Conv2d(ch_t, cfg.hidden_dim, kernel_size=1)
+        self.input_proj_rot = nn.Conv2d(ch_rot, cfg.hidden_dim, kernel_size=1)
+        self.query_embed_t = nn.Embedding(1, cfg.hidden_dim)
+        self.query_embed_rot = nn.Embedding(1, cfg.hidden_dim)
+        self.regressor_head_t = nn.Sequential(PoseRegressor(cfg.hidden_dim, 3, cfg.head_dim))
+        self.regressor_head_rot = nn.Sequential(PoseRegressor(cfg.hidden_dim, 4, cfg.head_dim))
+
+    def forward(self, img: torch.Tensor) -> torch.Tensor:
+        """img: (N, C, S, S), already normalised. Returns (N, 7): x y z qw qx qy qz."""
+        r3, r4 = self.backbone[0].body.endpoints(img)
+        pos_embed = self.backbone[1]
+        hs_t = self.transformer_t(self.input_proj_t(r4), pos_embed(r4), self.query_embed_t.weight)
+        hs_rot = self.transformer_rot(self.input_proj_rot(r3), pos_embed(r3),
+                                      self.query_embed_rot.weight)
+        x_t = self.regressor_head_t[0](hs_t[:, 0, :])
+        x_rot = self.regressor_head_rot[0](hs_rot[:, 0, :])
+        return torch.cat([x_t, x_rot], dim=1)
