@@ -4,7 +4,9 @@
 
 namespace aprt::kernels {
 
-size_t f32_attention__ref_scratch(const AttentionShape& s) { return size_t(s.kv_len); }
+size_t f32_attention__ref_scratch(const AttentionShape& s) {
+  return size_t(s.kv_len);
+}
 
 void f32_attention__ref(const AttentionShape& s, const float* q, const float* k, const float* v,
                         float scale, float* o, float* scratch) {

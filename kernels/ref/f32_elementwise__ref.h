@@ -11,7 +11,6 @@ void f32_add__ref(size_t n, const float* a, const float* b, float* y);
 // y[i] = act(x[i])
 void f32_activation__ref(size_t n, Act act, const float* x, float* y);
 // Row-wise concatenation: y[r] = x0[r] ++ x1[r] ++ ...; widths[i] columns from xs[i].
-void f32_concat_rows__ref(int rows, int count, const float* const* xs, const int* widths,
-                          float* y);
+void f32_concat_rows__ref(int rows, int count, const float* const* xs, const int* widths, float* y);
 
 }  // namespace aprt::kernels

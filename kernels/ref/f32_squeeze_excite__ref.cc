@@ -4,7 +4,9 @@
 
 namespace aprt::kernels {
 
-size_t f32_squeeze_excite__ref_scratch(int c, int cr) { return size_t(c) + size_t(cr); }
+size_t f32_squeeze_excite__ref_scratch(int c, int cr) {
+  return size_t(c) + size_t(cr);
+}
 
 void f32_squeeze_excite__ref(int pixels, int c, int cr, const float* x, const float* w1,
                              const float* b1, const float* w2, const float* b2, float* y,

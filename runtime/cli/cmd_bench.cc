@@ -110,22 +110,22 @@ int cmd_bench(int argc, char** argv) {
     std::printf("runs         %ld after %ld warm-up, 1 thread\n", runs, warmup);
     std::printf("latency      min %.3f  median %.3f  p99 %.3f  max %.3f ms\n", sorted.front(), med,
                 p99, sorted.back());
-    std::printf("throughput   %.2f GFLOP/s (%.3f GFLOP per frame)\n", gflops / (med / 1e3),
-                gflops);
+    std::printf("throughput   %.2f GFLOP/s (%.3f GFLOP per frame)\n", gflops / (med / 1e3), gflops);
     std::printf("allocations  %llu during the timed runs%s\n",
                 static_cast<unsigned long long>(allocs),
                 allocation_counter_covers_malloc() ? "" : " (operator new only: sanitizer build)");
-    std::printf("memory       arena %.3f MB, weights %.2f MB, scratch %.3f MB, total %.2f MB%s; "
-                "peak RSS %.1f MB\n",
-                double(r.arena_bytes) / 1e6, double(r.weight_bytes) / 1e6,
-                double(r.scratch_bytes) / 1e6, double(r.total_bytes) / 1e6,
-                r.locked ? " (locked)" : " (not locked: raise ulimit -l)",
-                double(peak_rss_kb()) / 1e3);
+    std::printf(
+        "memory       arena %.3f MB, weights %.2f MB, scratch %.3f MB, total %.2f MB%s; "
+        "peak RSS %.1f MB\n",
+        double(r.arena_bytes) / 1e6, double(r.weight_bytes) / 1e6, double(r.scratch_bytes) / 1e6,
+        double(r.total_bytes) / 1e6, r.locked ? " (locked)" : " (not locked: raise ulimit -l)",
+        double(peak_rss_kb()) / 1e3);
   }
   if (profile && !json) {
     std::vector<size_t> order(e.op_count());
     for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return op_total[a] > op_total[b]; });
+    std::sort(order.begin(), order.end(),
+              [&](size_t a, size_t b) { return op_total[a] > op_total[b]; });
     uint64_t all = 0;
     for (uint64_t t : op_total) all += t;
     double by_kind[format::kMaxOpCode + 1] = {};

@@ -53,18 +53,18 @@ int cmd_info(int argc, char** argv) {
   std::printf("source       %s sha256 ", m.source_name[0] ? m.source_name : "?");
   for (uint8_t b : m.source_sha256) std::printf("%02x", b);
   std::printf("\n");
-  std::printf("modality     %s, input %ux%ux%ux%u (NHWC f32)\n",
-              format::modality_name(m.modality), m.input_shape[0], m.input_shape[1],
-              m.input_shape[2], m.input_shape[3]);
+  std::printf("modality     %s, input %ux%ux%ux%u (NHWC f32)\n", format::modality_name(m.modality),
+              m.input_shape[0], m.input_shape[1], m.input_shape[2], m.input_shape[3]);
   std::printf("normalise    mean (");
   for (int c = 0; c < m.norm_channels; ++c) std::printf("%s%.4g", c ? ", " : "", m.norm_mean[c]);
   std::printf(") std (");
   for (int c = 0; c < m.norm_channels; ++c) std::printf("%s%.4g", c ? ", " : "", m.norm_std[c]);
   std::printf("), %s\n", resize_text(m.resize_policy));
-  std::printf("network      %s, d_model %u, %u heads, %u encoder + %u decoder layers, "
-              "feed-forward %u\n",
-              m.backbone[0] ? m.backbone : "?", m.d_model, m.nheads, m.enc_layers, m.dec_layers,
-              m.dim_feedforward);
+  std::printf(
+      "network      %s, d_model %u, %u heads, %u encoder + %u decoder layers, "
+      "feed-forward %u\n",
+      m.backbone[0] ? m.backbone : "?", m.d_model, m.nheads, m.enc_layers, m.dec_layers,
+      m.dim_feedforward);
   std::printf("pose bounds  min (%.3f, %.3f, %.3f) max (%.3f, %.3f, %.3f) m\n", m.pose_min[0],
               m.pose_min[1], m.pose_min[2], m.pose_max[0], m.pose_max[1], m.pose_max[2]);
   if (m.has_val_error) {
@@ -86,21 +86,22 @@ int cmd_info(int argc, char** argv) {
   for (size_t i = 0; i < e.tensor_count(); ++i) n_const += e.tensor(i).is_const();
   std::printf("tensors      %zu (%zu constants, %.2f MB weights)\n", e.tensor_count(), n_const,
               double(r.weight_bytes) / 1e6);
-  std::printf("arena        %.3f MB planned; %.3f MB if every tensor had its own buffer; "
-              "%.3f MB liveness lower bound\n",
-              double(r.arena_bytes) / 1e6, double(r.arena_sum_bytes) / 1e6,
-              double(r.arena_lower_bound_bytes) / 1e6);
+  std::printf(
+      "arena        %.3f MB planned; %.3f MB if every tensor had its own buffer; "
+      "%.3f MB liveness lower bound\n",
+      double(r.arena_bytes) / 1e6, double(r.arena_sum_bytes) / 1e6,
+      double(r.arena_lower_bound_bytes) / 1e6);
   std::printf("memory       %.2f MB in one block (image %.2f + arena %.3f + scratch %.3f)\n",
-              double(r.total_bytes) / 1e6, double(r.image_bytes) / 1e6,
-              double(r.arena_bytes) / 1e6, double(r.scratch_bytes) / 1e6);
+              double(r.total_bytes) / 1e6, double(r.image_bytes) / 1e6, double(r.arena_bytes) / 1e6,
+              double(r.scratch_bytes) / 1e6);
   if (list_ops) {
     std::printf("\n  #  op              MFLOP  output          name\n");
     for (size_t i = 0; i < e.op_count(); ++i) {
       const OpNode& n = e.op(i);
       char shape[48];
       shape_text(*n.out[0], shape, sizeof shape);
-      std::printf("%4zu %-14s %7.2f  %-15s %s\n", i, format::op_name(n.code),
-                  double(n.flops) / 1e6, shape, n.name);
+      std::printf("%4zu %-14s %7.2f  %-15s %s\n", i, format::op_name(n.code), double(n.flops) / 1e6,
+                  shape, n.name);
     }
   }
   return 0;

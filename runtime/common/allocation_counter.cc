@@ -16,15 +16,23 @@
 
 namespace {
 std::atomic<uint64_t> g_allocations{0};
-inline void count() { g_allocations.fetch_add(1, std::memory_order_relaxed); }
+inline void count() {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+}
 }  // namespace
 
 namespace aprt {
-uint64_t allocation_count() noexcept { return g_allocations.load(std::memory_order_relaxed); }
+uint64_t allocation_count() noexcept {
+  return g_allocations.load(std::memory_order_relaxed);
+}
 #ifdef APRT_ASAN
-bool allocation_counter_covers_malloc() noexcept { return false; }
+bool allocation_counter_covers_malloc() noexcept {
+  return false;
+}
 #else
-bool allocation_counter_covers_malloc() noexcept { return true; }
+bool allocation_counter_covers_malloc() noexcept {
+  return true;
+}
 #endif
 }  // namespace aprt
 
@@ -63,7 +71,9 @@ int posix_memalign(void** out, size_t a, size_t n) {
   *out = p;
   return 0;
 }
-void free(void* p) { __libc_free(p); }
+void free(void* p) {
+  __libc_free(p);
+}
 }
 #define APRT_RAW_ALLOC(n) __libc_malloc(n)
 #define APRT_RAW_ALIGNED(a, n) __libc_memalign(a, n)
@@ -89,8 +99,12 @@ void* counted_new_aligned(size_t n, std::align_val_t a) {
 }
 }  // namespace
 
-void* operator new(size_t n) { return counted_new(n); }
-void* operator new[](size_t n) { return counted_new(n); }
+void* operator new(size_t n) {
+  return counted_new(n);
+}
+void* operator new[](size_t n) {
+  return counted_new(n);
+}
 void* operator new(size_t n, const std::nothrow_t&) noexcept {
   count();
   return APRT_RAW_ALLOC(n ? n : 1);
@@ -99,13 +113,33 @@ void* operator new[](size_t n, const std::nothrow_t&) noexcept {
   count();
   return APRT_RAW_ALLOC(n ? n : 1);
 }
-void* operator new(size_t n, std::align_val_t a) { return counted_new_aligned(n, a); }
-void* operator new[](size_t n, std::align_val_t a) { return counted_new_aligned(n, a); }
-void operator delete(void* p) noexcept { APRT_RAW_FREE(p); }
-void operator delete[](void* p) noexcept { APRT_RAW_FREE(p); }
-void operator delete(void* p, size_t) noexcept { APRT_RAW_FREE(p); }
-void operator delete[](void* p, size_t) noexcept { APRT_RAW_FREE(p); }
-void operator delete(void* p, std::align_val_t) noexcept { APRT_RAW_FREE(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { APRT_RAW_FREE(p); }
-void operator delete(void* p, size_t, std::align_val_t) noexcept { APRT_RAW_FREE(p); }
-void operator delete[](void* p, size_t, std::align_val_t) noexcept { APRT_RAW_FREE(p); }
+void* operator new(size_t n, std::align_val_t a) {
+  return counted_new_aligned(n, a);
+}
+void* operator new[](size_t n, std::align_val_t a) {
+  return counted_new_aligned(n, a);
+}
+void operator delete(void* p) noexcept {
+  APRT_RAW_FREE(p);
+}
+void operator delete[](void* p) noexcept {
+  APRT_RAW_FREE(p);
+}
+void operator delete(void* p, size_t) noexcept {
+  APRT_RAW_FREE(p);
+}
+void operator delete[](void* p, size_t) noexcept {
+  APRT_RAW_FREE(p);
+}
+void operator delete(void* p, std::align_val_t) noexcept {
+  APRT_RAW_FREE(p);
+}
+void operator delete[](void* p, std::align_val_t) noexcept {
+  APRT_RAW_FREE(p);
+}
+void operator delete(void* p, size_t, std::align_val_t) noexcept {
+  APRT_RAW_FREE(p);
+}
+void operator delete[](void* p, size_t, std::align_val_t) noexcept {
+  APRT_RAW_FREE(p);
+}

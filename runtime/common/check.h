@@ -21,16 +21,16 @@ FatalHandler set_fatal_handler(FatalHandler handler) noexcept;
 
 }  // namespace aprt
 
-#define APRT_ENSURE(cond, code, ...)       \
-  do {                                     \
-    if (!(cond)) {                         \
+#define APRT_ENSURE(cond, code, ...)           \
+  do {                                         \
+    if (!(cond)) {                             \
       return ::aprt::Error(code, __VA_ARGS__); \
-    }                                      \
+    }                                          \
   } while (0)
 
-#define APRT_ENFORCE(cond, message)                           \
-  do {                                                        \
-    if (!(cond)) ::aprt::fatal(__FILE__, __LINE__, message);  \
+#define APRT_ENFORCE(cond, message)                          \
+  do {                                                       \
+    if (!(cond)) ::aprt::fatal(__FILE__, __LINE__, message); \
   } while (0)
 
 #ifdef NDEBUG

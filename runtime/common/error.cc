@@ -49,7 +49,8 @@ Error& Error::with_context(const char* format, ...) noexcept {
   // Truncation at capacity is intended: build "prefix: message" by hand.
   char joined[kCapacity];
   size_t used = 0;
-  for (const char* part : {static_cast<const char*>(prefix), ": ", static_cast<const char*>(message_)}) {
+  for (const char* part :
+       {static_cast<const char*>(prefix), ": ", static_cast<const char*>(message_)}) {
     const size_t len = std::strlen(part);
     const size_t room = kCapacity - 1 - used;
     const size_t take = len < room ? len : room;

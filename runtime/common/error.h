@@ -29,7 +29,7 @@ enum class Errc : uint16_t {
   kBadGraph,            // use before definition, double definition, ...
   kTooLarge,            // absurd sizes
   kOutOfMemory,
-  kWrongTarget,         // valid file, but not for this runtime/configuration
+  kWrongTarget,  // valid file, but not for this runtime/configuration
   kInvalidArgument,
   kUnsupported,
   kNotReady,

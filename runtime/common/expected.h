@@ -16,8 +16,8 @@ namespace aprt {
 template <class T>
 class [[nodiscard]] Expected {
  public:
-  Expected(const T& value) : has_(true) { new (&value_) T(value); }  // NOLINT implicit
-  Expected(T&& value) : has_(true) { new (&value_) T(std::move(value)); }  // NOLINT implicit
+  Expected(const T& value) : has_(true) { new (&value_) T(value); }           // NOLINT implicit
+  Expected(T&& value) : has_(true) { new (&value_) T(std::move(value)); }     // NOLINT implicit
   Expected(const Error& error) : has_(false) { new (&error_) Error(error); }  // NOLINT implicit
   Expected(Expected&& other) noexcept : has_(other.has_) {
     if (has_) {
@@ -66,6 +66,8 @@ class [[nodiscard]] Expected<void> {
 
 using Status = Expected<void>;
 
-inline Status ok() noexcept { return Status(); }
+inline Status ok() noexcept {
+  return Status();
+}
 
 }  // namespace aprt

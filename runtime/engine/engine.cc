@@ -21,9 +21,13 @@ constexpr size_t kAlign = 64;
 constexpr size_t kNotInArena = SIZE_MAX;
 constexpr uint64_t kMaxModelFileBytes = uint64_t(4) << 30;
 
-size_t round_up(size_t n, size_t a) { return (n + a - 1) / a * a; }
+size_t round_up(size_t n, size_t a) {
+  return (n + a - 1) / a * a;
+}
 
-bool in_arena(const Tensor& t) { return t.kind != format::TensorKind::kConst; }
+bool in_arena(const Tensor& t) {
+  return t.kind != format::TensorKind::kConst;
+}
 
 }  // namespace
 
@@ -169,7 +173,8 @@ Expected<size_t> Engine::memory_required(const uint8_t* data, size_t size) {
 Expected<std::unique_ptr<Engine>> Engine::load_memory(const uint8_t* data, size_t size,
                                                       const EngineOptions& options) {
   // Pass 1 on the caller's bytes: validate everything (checksums included) and size.
-  auto checked = ModelFile::parse(data, size);
+  auto checked =
+      ModelFile::parse(data, size, ParseOptions{.verify_checksums = options.verify_checksums});
   if (!checked) return checked.error();
   size_t required = 0;
   {
@@ -180,16 +185,16 @@ Expected<std::unique_ptr<Engine>> Engine::load_memory(const uint8_t* data, size_
   uint8_t* region = nullptr;
   bool owned = false;
   if (options.memory) {
-    APRT_ENSURE(reinterpret_cast<uintptr_t>(options.memory) % kAlign == 0,
-                Errc::kInvalidArgument, "engine: caller memory must be %zu-byte aligned", kAlign);
+    APRT_ENSURE(reinterpret_cast<uintptr_t>(options.memory) % kAlign == 0, Errc::kInvalidArgument,
+                "engine: caller memory must be %zu-byte aligned", kAlign);
     APRT_ENSURE(options.memory_bytes >= required, Errc::kInvalidArgument,
                 "engine: caller memory has %zu bytes, the model needs %zu", options.memory_bytes,
                 required);
     region = static_cast<uint8_t*>(options.memory);
   } else {
     void* p = mmap(nullptr, required, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    APRT_ENSURE(p != MAP_FAILED, Errc::kOutOfMemory, "engine: cannot map %zu bytes: %s",
-                required, std::strerror(errno));
+    APRT_ENSURE(p != MAP_FAILED, Errc::kOutOfMemory, "engine: cannot map %zu bytes: %s", required,
+                std::strerror(errno));
     region = static_cast<uint8_t*>(p);
     owned = true;
   }

@@ -31,10 +31,13 @@ struct EngineOptions {
   // Engine::memory_required() bytes); null to let load() map its own.
   void* memory = nullptr;
   size_t memory_bytes = 0;
-  bool lock_memory = true;     // mlock the working memory (best effort)
-  bool require_locked = false; // fail load() if mlock is refused
+  bool lock_memory = true;      // mlock the working memory (best effort)
+  bool require_locked = false;  // fail load() if mlock is refused
   // If non-zero, refuse models of another modality (Errc::kWrongTarget).
   uint32_t expect_modality = 0;
+  // Section checksums are always verified on vehicles; fuzzers turn this off to
+  // reach the checks behind them.
+  bool verify_checksums = true;
 };
 
 struct MemoryReport {

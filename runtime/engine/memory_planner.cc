@@ -6,7 +6,9 @@
 namespace aprt {
 namespace {
 
-size_t round_up(size_t n, size_t a) { return (n + a - 1) / a * a; }
+size_t round_up(size_t n, size_t a) {
+  return (n + a - 1) / a * a;
+}
 
 bool overlaps(const PlanBuffer& a, const PlanBuffer& b) {
   return a.first <= b.last && b.first <= a.last;
@@ -22,9 +24,8 @@ PlanSummary plan_greedy_by_size(PlanBuffer* buffers, int count, size_t align) {
     order[i] = i;
     s.sum_bytes += round_up(buffers[i].bytes, align);
   }
-  std::stable_sort(order, order + count, [&](int a, int b) {
-    return buffers[a].bytes > buffers[b].bytes;
-  });
+  std::stable_sort(order, order + count,
+                   [&](int a, int b) { return buffers[a].bytes > buffers[b].bytes; });
   std::vector<int> placed;
   placed.reserve(count);
   std::vector<int> live;
@@ -57,7 +58,8 @@ PlanSummary plan_greedy_by_size(PlanBuffer* buffers, int count, size_t align) {
   for (int t = lo; t <= hi; ++t) {
     size_t live_sum = 0;
     for (int i = 0; i < count; ++i) {
-      if (buffers[i].first <= t && t <= buffers[i].last) live_sum += round_up(buffers[i].bytes, align);
+      if (buffers[i].first <= t && t <= buffers[i].last)
+        live_sum += round_up(buffers[i].bytes, align);
     }
     s.lower_bound_bytes = std::max(s.lower_bound_bytes, live_sum);
   }

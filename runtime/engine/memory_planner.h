@@ -13,8 +13,8 @@ namespace aprt {
 
 struct PlanBuffer {
   size_t bytes = 0;
-  int first = 0;  // op index that writes it (-1: live before the first op)
-  int last = 0;   // last op index that reads it
+  int first = 0;      // op index that writes it (-1: live before the first op)
+  int last = 0;       // last op index that reads it
   size_t offset = 0;  // result
 };
 

@@ -120,10 +120,10 @@ class ModelFileParser {
 
  private:
   Status header() {
-    APRT_ENSURE(data_ != nullptr, Errc::kInvalidArgument, "model_bin: no data");
     APRT_ENSURE(size_ >= format::kHeaderBytes, Errc::kTruncated,
                 "model_bin: file is %zu bytes, shorter than the %u-byte header (truncated?)", size_,
                 format::kHeaderBytes);
+    APRT_ENSURE(data_ != nullptr, Errc::kInvalidArgument, "model_bin: no data");
     APRT_ENSURE(std::memcmp(data_, format::kMagic, 8) == 0, Errc::kBadMagic,
                 "model_bin: bad magic (not an aprt model file)");
     const uint16_t major = load<uint16_t>(data_ + 8);
@@ -196,12 +196,14 @@ class ModelFileParser {
                     section_name(o.tag));
       }
       s.data = data_ + s.offset;
-      if (options_.verify_checksums) {
-        APRT_ENSURE(crc32(s.data, s.size) == s.crc, Errc::kChecksum,
-                    "model_bin: section %s checksum mismatch (file corrupted or truncated?)",
-                    name);
-      }
       sections_[n_sections_++] = s;  // unknown tags are kept but ignored (minor versions)
+    }
+    // Checksums after the structure, so that a structural defect gets its own message.
+    for (uint32_t i = 0; i < n_sections_ && options_.verify_checksums; ++i) {
+      const Section& s = sections_[i];
+      APRT_ENSURE(crc32(s.data, s.size) == s.crc, Errc::kChecksum,
+                  "model_bin: section %s checksum mismatch (file corrupted or truncated?)",
+                  section_name(s.tag));
     }
     for (uint32_t tag : {format::kSecMeta, format::kSecStrings, format::kSecTensors,
                          format::kSecOps, format::kSecWeights}) {
@@ -253,12 +255,13 @@ class ModelFileParser {
       const auto type = static_cast<MetaType>(load<uint16_t>(s->data + pos + 2));
       const uint32_t len = load<uint32_t>(s->data + pos + 4);
       APRT_ENSURE(len <= s->size - pos - 8, Errc::kBadMetadata,
-                  "model_bin: META key %u claims %u bytes, past the section end",
-                  unsigned(key), len);
+                  "model_bin: META key %u claims %u bytes, past the section end", unsigned(key),
+                  len);
       const uint8_t* v = s->data + pos + 8;
       auto expect = [&](MetaType t, uint32_t min_count, uint32_t max_count) -> Status {
-        APRT_ENSURE(type == t, Errc::kBadMetadata, "model_bin: META key %u has type %u, expected %u",
-                    unsigned(key), unsigned(type), unsigned(t));
+        APRT_ENSURE(type == t, Errc::kBadMetadata,
+                    "model_bin: META key %u has type %u, expected %u", unsigned(key),
+                    unsigned(type), unsigned(t));
         const uint32_t unit = (t == MetaType::kU32 || t == MetaType::kF32) ? 4 : 1;
         APRT_ENSURE(len % unit == 0 && len / unit >= min_count && len / unit <= max_count,
                     Errc::kBadMetadata, "model_bin: META key %u has %u bytes (wrong count)",
@@ -292,8 +295,8 @@ class ModelFileParser {
         case MetaKey::kModality: {
           if (!(st = expect(MetaType::kU32, 1, 1))) return st;
           const uint32_t mod = load<uint32_t>(v);
-          APRT_ENSURE(mod >= 1 && mod <= 3, Errc::kBadMetadata,
-                      "model_bin: unknown modality %u", mod);
+          APRT_ENSURE(mod >= 1 && mod <= 3, Errc::kBadMetadata, "model_bin: unknown modality %u",
+                      mod);
           m.modality = static_cast<format::Modality>(mod);
           mark(2);
           break;
@@ -374,15 +377,13 @@ class ModelFileParser {
           m.config_json = reinterpret_cast<const char*>(v);
           m.config_json_bytes = len;
           break;
-        default:
-          break;  // unknown keys: written by a newer minor version, ignored
+        default: break;  // unknown keys: written by a newer minor version, ignored
       }
       pos += 8 + ((uint64_t(len) + 3) & ~uint64_t(3));
     }
-    static const char* const kRequired[] = {"producer",  "source_sha256", "modality",
-                                            "input_shape", "norm_mean",   "norm_std",
-                                            "pose_min",  "pose_max",      "d_model",
-                                            "nheads",    "enc_layers",    "dec_layers"};
+    static const char* const kRequired[] = {
+        "producer", "source_sha256", "modality", "input_shape", "norm_mean",  "norm_std",
+        "pose_min", "pose_max",      "d_model",  "nheads",      "enc_layers", "dec_layers"};
     for (int bit = 0; bit < 12; ++bit) {
       APRT_ENSURE(seen & (uint64_t(1) << bit), Errc::kBadMetadata,
                   "model_bin: required metadata '%s' is missing", kRequired[bit]);
@@ -401,8 +402,8 @@ class ModelFileParser {
     return ok();
   }
 
-  Status table_prefix(const Section* s, uint32_t entry_bytes, uint32_t max_count,
-                      const char* what, uint32_t* count) {
+  Status table_prefix(const Section* s, uint32_t entry_bytes, uint32_t max_count, const char* what,
+                      uint32_t* count) {
     APRT_ENSURE(s->size >= format::kTablePrefixBytes, Errc::kTruncated,
                 "model_bin: %s table has no header", what);
     *count = load<uint32_t>(s->data);
@@ -412,8 +413,8 @@ class ModelFileParser {
     APRT_ENSURE(*count >= 1 && *count <= max_count, Errc::kTooLarge,
                 "model_bin: %u %s entries (1..%u allowed)", *count, what, max_count);
     APRT_ENSURE(s->size == format::kTablePrefixBytes + uint64_t(*count) * entry_bytes,
-                Errc::kSectionBounds, "model_bin: %s table size %llu does not fit %u entries",
-                what, static_cast<unsigned long long>(s->size), *count);
+                Errc::kSectionBounds, "model_bin: %s table size %llu does not fit %u entries", what,
+                static_cast<unsigned long long>(s->size), *count);
     return ok();
   }
 
@@ -423,8 +424,8 @@ class ModelFileParser {
     file_.weights_ = w->data;
     file_.weights_bytes_ = w->size;
     uint32_t count = 0;
-    if (Status st = table_prefix(s, format::kTensorEntryBytes, format::kMaxTensors, "tensor",
-                                 &count);
+    if (Status st =
+            table_prefix(s, format::kTensorEntryBytes, format::kMaxTensors, "tensor", &count);
         !st) {
       return st;
     }
@@ -477,13 +478,12 @@ class ModelFileParser {
         APRT_ENSURE(t.data_offset % format::kAlign == 0, Errc::kMisaligned,
                     "model_bin: constant '%s' data offset %llu is not %u-byte aligned", t.name,
                     static_cast<unsigned long long>(t.data_offset), format::kAlign);
-        APRT_ENSURE(t.data_offset <= w->size && t.bytes <= w->size - t.data_offset,
-                    Errc::kSectionBounds,
-                    "model_bin: constant '%s' data [%llu, +%llu) lies outside WEIGHTS (%llu "
-                    "bytes)",
-                    t.name, static_cast<unsigned long long>(t.data_offset),
-                    static_cast<unsigned long long>(t.bytes),
-                    static_cast<unsigned long long>(w->size));
+        APRT_ENSURE(
+            t.data_offset <= w->size && t.bytes <= w->size - t.data_offset, Errc::kSectionBounds,
+            "model_bin: constant '%s' data [%llu, +%llu) lies outside WEIGHTS (%llu "
+            "bytes)",
+            t.name, static_cast<unsigned long long>(t.data_offset),
+            static_cast<unsigned long long>(t.bytes), static_cast<unsigned long long>(w->size));
       } else {
         APRT_ENSURE(data_bytes == 0 && t.data_offset == 0, Errc::kBadTensor,
                     "model_bin: non-constant tensor '%s' claims weight data", t.name);
@@ -509,8 +509,7 @@ class ModelFileParser {
         file_.input_ = int(i);
       }
       if (t.kind == TensorKind::kOutput) {
-        APRT_ENSURE(file_.output_ < 0, Errc::kBadGraph,
-                    "model_bin: more than one output tensor");
+        APRT_ENSURE(file_.output_ < 0, Errc::kBadGraph, "model_bin: more than one output tensor");
         file_.output_ = int(i);
       }
     }
@@ -561,17 +560,17 @@ class ModelFileParser {
                   op.n_in, op.n_out);
       for (int k = 0; k < format::kMaxOpInputs; ++k) {
         op.in[k] = load<int32_t>(e + 8 + 4 * k);
-        const bool ok_index = (op.in[k] >= -1 && op.in[k] < n_tensors) &&
-                              (k < op.n_in || op.in[k] == -1);
+        const bool ok_index =
+            (op.in[k] >= -1 && op.in[k] < n_tensors) && (k < op.n_in || op.in[k] == -1);
         APRT_ENSURE(ok_index, Errc::kBadOp, "model_bin: op %u '%s' input %d index %d invalid", i,
                     op.name, k, op.in[k]);
       }
       for (int k = 0; k < format::kMaxOpOutputs; ++k) {
         op.out[k] = load<int32_t>(e + 40 + 4 * k);
-        const bool ok_index = k < op.n_out ? (op.out[k] >= 0 && op.out[k] < n_tensors)
-                                           : op.out[k] == -1;
-        APRT_ENSURE(ok_index, Errc::kBadOp, "model_bin: op %u '%s' output %d index %d invalid",
-                    i, op.name, k, op.out[k]);
+        const bool ok_index =
+            k < op.n_out ? (op.out[k] >= 0 && op.out[k] < n_tensors) : op.out[k] == -1;
+        APRT_ENSURE(ok_index, Errc::kBadOp, "model_bin: op %u '%s' output %d index %d invalid", i,
+                    op.name, k, op.out[k]);
       }
       for (int k = 0; k < format::kMaxOpParams; ++k) op.params[k] = load<int32_t>(e + 48 + 4 * k);
     }
@@ -600,13 +599,13 @@ class ModelFileParser {
                     Errc::kBadGraph, "model_bin: op %zu '%s' writes %s tensor '%s'", i, op.name,
                     t.kind == TensorKind::kConst ? "constant" : "input", t.name);
         APRT_ENSURE(!defined[op.out[k]], Errc::kBadGraph,
-                    "model_bin: tensor '%s' is written twice (second time by op %zu '%s')",
-                    t.name, i, op.name);
+                    "model_bin: tensor '%s' is written twice (second time by op %zu '%s')", t.name,
+                    i, op.name);
         defined[op.out[k]] = 1;
       }
     }
-    APRT_ENSURE(defined[file_.output_], Errc::kBadGraph,
-                "model_bin: no op writes the output '%s'", file_.tensors_[file_.output_].name);
+    APRT_ENSURE(defined[file_.output_], Errc::kBadGraph, "model_bin: no op writes the output '%s'",
+                file_.tensors_[file_.output_].name);
     return ok();
   }
 

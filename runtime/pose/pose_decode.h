@@ -21,7 +21,7 @@ enum PoseFlag : uint32_t {
 };
 
 struct PoseEstimate {
-  double position[3] = {};             // metres, map frame of the training data
+  double position[3] = {};               // metres, map frame of the training data
   double orientation[4] = {1, 0, 0, 0};  // w, x, y, z; unit length, w >= 0
   float raw_quat_norm = 0.0f;
   uint32_t flags = 0;

@@ -39,10 +39,10 @@ Status prepare_attention(OpNode& node) {
   APRT_OP_ENSURE(node, std::isfinite(scale) && scale > 0.0f, Errc::kBadOp, "scale %g invalid",
                  scale);
   APRT_OP_ENSURE(node, k->last_dim() == e && v->last_dim() == e, Errc::kShapeMismatch,
-                 "key/value width %d/%d differs from the query's %d", k->last_dim(),
-                 v->last_dim(), e);
-  APRT_OP_ENSURE(node, k->rows() == v->rows(), Errc::kShapeMismatch,
-                 "%zu keys but %zu values", k->rows(), v->rows());
+                 "key/value width %d/%d differs from the query's %d", k->last_dim(), v->last_dim(),
+                 e);
+  APRT_OP_ENSURE(node, k->rows() == v->rows(), Errc::kShapeMismatch, "%zu keys but %zu values",
+                 k->rows(), v->rows());
   APRT_OP_ENSURE(node, y->numel == q->numel && y->last_dim() == e, Errc::kShapeMismatch,
                  "output must be %zu x %d", q->rows(), e);
   auto& s = node.state_as<AttnState>();

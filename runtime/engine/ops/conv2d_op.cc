@@ -63,10 +63,9 @@ Status prepare(OpNode& node, bool depthwise) {
   }
   const int bd[1] = {co};
   if (!(st = expect_dims(node, b, "bias", 1, bd))) return st;
-  APRT_OP_ENSURE(node, pt >= 0 && pl >= 0 && pb >= 0 && pr >= 0 && pt < kh && pb < kh &&
-                           pl < kw && pr < kw,
-                 Errc::kBadOp, "padding (t%d l%d b%d r%d) invalid for a %dx%d kernel", pt, pl,
-                 pb, pr, kh, kw);
+  APRT_OP_ENSURE(
+      node, pt >= 0 && pl >= 0 && pb >= 0 && pr >= 0 && pt < kh && pb < kh && pl < kw && pr < kw,
+      Errc::kBadOp, "padding (t%d l%d b%d r%d) invalid for a %dx%d kernel", pt, pl, pb, pr, kh, kw);
   const int ph = x->dims[1] + pt + pb, pw = x->dims[2] + pl + pr;
   APRT_OP_ENSURE(node, ph >= kh && pw >= kw, Errc::kShapeMismatch,
                  "padded input %dx%d is smaller than the %dx%d kernel", ph, pw, kh, kw);
@@ -88,7 +87,11 @@ Status prepare(OpNode& node, bool depthwise) {
 
 }  // namespace
 
-Status prepare_conv2d(OpNode& node) { return prepare(node, false); }
-Status prepare_dwconv2d(OpNode& node) { return prepare(node, true); }
+Status prepare_conv2d(OpNode& node) {
+  return prepare(node, false);
+}
+Status prepare_dwconv2d(OpNode& node) {
+  return prepare(node, true);
+}
 
 }  // namespace aprt::ops

@@ -21,8 +21,8 @@ void eval_add_ref(const OpNode& node, const RunContext&) {
 }
 
 void eval_activation_ref(const OpNode& node, const RunContext&) {
-  kernels::f32_activation__ref(node.out[0]->numel, node.state_as<ActState>().act,
-                               node.in[0]->f32(), node.out[0]->f32());
+  kernels::f32_activation__ref(node.out[0]->numel, node.state_as<ActState>().act, node.in[0]->f32(),
+                               node.out[0]->f32());
 }
 
 void eval_concat_ref(const OpNode& node, const RunContext&) {
@@ -38,11 +38,11 @@ Status prepare_add(OpNode& node) {
   Status st;
   APRT_OP_ENSURE(node, node.n_in == 2, Errc::kBadOp, "needs 2 inputs, has %d", node.n_in);
   if (!(st = expect_f32(node, node.in[0], "first operand", false))) return st;
-  APRT_OP_ENSURE(node, node.in[1] && node.in[1]->dtype == format::DType::kF32,
-                 Errc::kShapeMismatch, "second operand must be f32");
+  APRT_OP_ENSURE(node, node.in[1] && node.in[1]->dtype == format::DType::kF32, Errc::kShapeMismatch,
+                 "second operand must be f32");
   if (!(st = expect_f32(node, node.out[0], "output", false))) return st;
-  APRT_OP_ENSURE(node, node.in[0]->numel == node.in[1]->numel &&
-                           node.out[0]->numel == node.in[0]->numel,
+  APRT_OP_ENSURE(node,
+                 node.in[0]->numel == node.in[1]->numel && node.out[0]->numel == node.in[0]->numel,
                  Errc::kShapeMismatch, "operands/output have %zu, %zu and %zu elements",
                  node.in[0]->numel, node.in[1]->numel, node.out[0]->numel);
   node.flops = node.out[0]->numel;

@@ -20,8 +20,7 @@ Status expect_f32(const OpNode& node, const Tensor* t, const char* role, bool wa
   APRT_OP_ENSURE(node, t->dtype == format::DType::kF32, Errc::kShapeMismatch,
                  "%s '%s' is %s, expected f32", role, t->name, format::dtype_name(t->dtype));
   if (want_const) {
-    APRT_OP_ENSURE(node, t->is_const(), Errc::kBadOp, "%s '%s' must be a constant", role,
-                   t->name);
+    APRT_OP_ENSURE(node, t->is_const(), Errc::kBadOp, "%s '%s' must be a constant", role, t->name);
   } else {
     APRT_OP_ENSURE(node, !t->is_const(), Errc::kBadOp, "%s '%s' must not be a constant", role,
                    t->name);
@@ -48,8 +47,8 @@ Status expect_dims(const OpNode& node, const Tensor* t, const char* role, int ra
 }
 
 Status expect_act(const OpNode& node, int32_t act) {
-  APRT_OP_ENSURE(node, act >= 0 && act <= format::kMaxAct, Errc::kBadOp,
-                 "unknown activation %d", act);
+  APRT_OP_ENSURE(node, act >= 0 && act <= format::kMaxAct, Errc::kBadOp, "unknown activation %d",
+                 act);
   return ok();
 }
 

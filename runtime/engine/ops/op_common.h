@@ -12,8 +12,8 @@ namespace aprt::ops {
 Error op_error(const OpNode& node, Errc code, const char* format, ...)
     __attribute__((format(printf, 3, 4)));
 
-#define APRT_OP_ENSURE(node, cond, code, ...)                        \
-  do {                                                               \
+#define APRT_OP_ENSURE(node, cond, code, ...)                           \
+  do {                                                                  \
     if (!(cond)) return ::aprt::ops::op_error(node, code, __VA_ARGS__); \
   } while (0)
 

@@ -162,9 +162,10 @@ def match_layernorm(g: Graph) -> bool:
         m = _match_decomposed_layernorm(g, n)
         if m:
             removed, x, gamma, beta, eps = m
-            new = Node("aprt.LayerNorm", n.name.rsplit("/", 1)[0] or n.name, [x], [n.outputs[0]],
+            name = removed[-1].name.rsplit("/", 1)[0] or removed[-1].name
+            new = Node("aprt.LayerNorm", name, [x], [removed[-1].outputs[0]],
                        params=dict(gamma=gamma, beta=beta, eps=eps))
-            g.replace(removed, [new], position_of=n)
+            g.replace(removed, [new], position_of=removed[-1])
             return True
     return False
 
@@ -179,18 +180,11 @@ def _last_axis_mean(g: Graph, node, x) -> bool:
     return axes is not None and [a % r for a in axes] == [r - 1] and node.attrs.get("keepdims", 1)
 
 
-def _match_decomposed_layernorm(g: Graph, n: Node):
-    """Add(Mul(Div(Sub(x, mean(x)), Sqrt(Add(mean(Pow(Sub, 2)), eps))), gamma), beta)."""
+def _match_decomposed_layernorm(g: Graph, div: Node):
+    """Div(Sub(x, mean(x)), Sqrt(Add(mean(Pow(Sub, 2)), eps))), then optionally
+    Mul(gamma) and Add(beta) (absent when they were 1 and 0 and folded away)."""
     p = g.producer.get
-    if n.op != "Add":
-        return None
-    mul = next((p(i) for i in n.inputs if p(i) is not None and p(i).op == "Mul"), None)
-    beta_name = next((i for i in n.inputs if g.is_const(i)), None)
-    if mul is None or beta_name is None:
-        return None
-    div = next((p(i) for i in mul.inputs if p(i) is not None and p(i).op == "Div"), None)
-    gamma_name = next((i for i in mul.inputs if g.is_const(i)), None)
-    if div is None or gamma_name is None:
+    if div.op != "Div":
         return None
     sub, sqrt = p(div.inputs[0]), p(div.inputs[1])
     if sub is None or sub.op != "Sub" or sqrt is None or sqrt.op != "Sqrt":
@@ -211,17 +205,27 @@ def _match_decomposed_layernorm(g: Graph, n: Node):
         return None
     if not _last_axis_mean(g, rm2, pw.outputs[0]):
         return None
-    inner = [rm1, sub, pw, rm2, add_eps, sqrt, div, mul]
-    for node in inner:
-        for o in node.outputs:
-            if not g.only_used_by(o, inner + [n]):
-                return None
     d = g.shape(x)[-1]
-    gamma = np.broadcast_to(np.asarray(g.const(gamma_name), np.float32), (d,)).copy()
-    beta = np.broadcast_to(np.asarray(g.const(beta_name), np.float32), (d,)).copy()
-    if np.size(g.const(gamma_name)) not in (1, d) or np.size(g.const(beta_name)) not in (1, d):
-        return None
-    return inner + [n], x, gamma, beta, _scalar(g, eps_name)
+    removed = [rm1, sub, pw, rm2, add_eps, sqrt, div]
+    gamma, beta = np.ones(d, np.float32), np.zeros(d, np.float32)
+    tail = div
+    for op, is_scale in (("Mul", True), ("Add", False)):
+        nxt = _single_user(g, tail.outputs[0], op)
+        c = next((i for i in nxt.inputs if g.is_const(i)), None) if nxt is not None else None
+        if c is None or np.size(g.const(c)) not in (1, d) or g.shape(nxt.outputs[0]) != g.shape(x):
+            continue
+        v = np.broadcast_to(np.asarray(g.const(c), np.float32).reshape(-1), (d,)).copy()
+        if is_scale:
+            gamma = v
+        else:
+            beta = v
+        removed.append(nxt)
+        tail = nxt
+    for node in removed[:-1]:
+        for o in node.outputs:
+            if not g.only_used_by(o, removed):
+                return None
+    return removed, x, gamma, beta, _scalar(g, eps_name)
 
 
 def match_gelu(g: Graph) -> bool:

@@ -1,0 +1,75 @@
+// Builds small model_bin files in memory for tests, and edits existing ones.
+//
+// Independent of the Python writer on purpose: two writers that agree on the
+// format (tests/tools checks the Python side) are a check on FORMAT.md itself.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "runtime/engine/model_format.h"
+
+namespace aprt::test {
+
+class ModelBuilder {
+ public:
+  ModelBuilder();
+
+  int constant(const std::string& name, std::vector<int> dims, std::vector<float> data);
+  int activation(const std::string& name, std::vector<int> dims);
+  int input(const std::string& name, std::vector<int> dims);
+  int output(const std::string& name, std::vector<int> dims);
+  void op(format::OpCode code, const std::string& name, std::vector<int> inputs,
+          std::vector<int> outputs, std::vector<int32_t> params = {});
+  static int32_t f32_bits(float f);
+
+  // Edits for tests that need an invalid but well-formed model.
+  int tensor_index(const std::string& name) const;
+  int op_index(const std::string& name) const;
+  void set_dims(int tensor, std::vector<int> dims) { tensors_[tensor].dims = std::move(dims); }
+  void set_param(int op, int k, int32_t v);
+  void set_inputs(int op, std::vector<int> inputs) { ops_[op].in = std::move(inputs); }
+  void set_kind(int tensor, format::TensorKind kind) { tensors_[tensor].kind = kind; }
+
+  // Metadata (sensible defaults; the input shape is taken from the input tensor).
+  uint32_t modality = 1;
+  std::vector<float> pose_min{0, 0, 0}, pose_max{10, 20, 5};
+  uint32_t d_model = 16, nheads = 2, enc_layers = 1, dec_layers = 1;
+  uint16_t version_major = format::kVersionMajor;
+  bool with_producer = true;
+
+  std::vector<uint8_t> build() const;
+
+ private:
+  struct T {
+    std::string name;
+    std::vector<int> dims;
+    format::TensorKind kind;
+    std::vector<float> data;
+  };
+  struct O {
+    format::OpCode code;
+    std::string name;
+    std::vector<int> in, out;
+    std::vector<int32_t> params;
+  };
+  std::vector<T> tensors_;
+  std::vector<O> ops_;
+};
+
+// A small model that uses every op kind: input [1,8,8,3] -> pose [1,7].
+std::vector<uint8_t> make_small_model();
+// Same with a modification applied to the builder before writing.
+std::vector<uint8_t> make_small_model(void (*edit)(ModelBuilder&));
+
+struct SectionInfo {
+  uint32_t tag;
+  uint64_t offset;
+  uint64_t size;
+};
+std::vector<SectionInfo> sections_of(const std::vector<uint8_t>& file);
+// Recomputes the header and section checksums after a deliberate edit.
+void fix_checksums(std::vector<uint8_t>& file);
+
+}  // namespace aprt::test

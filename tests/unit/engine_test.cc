@@ -1,0 +1,123 @@
+#include "runtime/engine/engine.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+
+#include "runtime/common/allocation_counter.h"
+#include "tests/support/model_builder.h"
+
+namespace aprt {
+namespace {
+
+void fill_input(Engine& e) {
+  for (size_t i = 0; i < e.input().numel; ++i) e.input().f32()[i] = std::sin(0.37f * float(i));
+}
+
+TEST(Engine, LoadsAndRunsEveryOpKind) {
+  const auto b = test::make_small_model();
+  auto e = Engine::load_memory(b.data(), b.size());
+  ASSERT_TRUE(e) << e.error().message();
+  EXPECT_EQ((*e)->op_count(), 12u);
+  fill_input(**e);
+  ASSERT_TRUE((*e)->run());
+  const float* y = (*e)->output().f32();
+  for (int i = 0; i < 7; ++i) EXPECT_TRUE(std::isfinite(y[i]));
+}
+
+TEST(Engine, RunIsDeterministicAndAllocatesNothing) {
+  const auto b = test::make_small_model();
+  auto loaded = Engine::load_memory(b.data(), b.size());
+  ASSERT_TRUE(loaded);
+  Engine& e = **loaded;
+  fill_input(e);
+  ASSERT_TRUE(e.run());
+  float first[7];
+  std::memcpy(first, e.output().f32(), sizeof first);
+  const AllocationScope scope;
+  for (int i = 0; i < 1000; ++i) {
+    fill_input(e);
+    ASSERT_TRUE(e.run());
+  }
+  EXPECT_EQ(scope.count(), 0u);
+  EXPECT_EQ(std::memcmp(first, e.output().f32(), sizeof first), 0);
+}
+
+void* volatile g_sink;  // keeps the compiler from eliding the allocations below
+
+TEST(Engine, CountsAllocationsWhenThereAreSome) {
+  // The counter itself must see allocations, or the zero above proves nothing.
+  const AllocationScope scope;
+  g_sink = ::operator new(64);
+  ::operator delete(g_sink);
+  EXPECT_EQ(scope.count(), 1u);
+  if (allocation_counter_covers_malloc()) {
+    g_sink = std::malloc(32);
+    std::free(g_sink);
+    EXPECT_EQ(scope.count(), 2u);
+  }
+}
+
+TEST(Engine, UsesCallerMemory) {
+  const auto b = test::make_small_model();
+  auto need = Engine::memory_required(b.data(), b.size());
+  ASSERT_TRUE(need) << need.error().message();
+  std::vector<uint8_t> storage(*need + 64);
+  auto* aligned = reinterpret_cast<uint8_t*>((reinterpret_cast<uintptr_t>(storage.data()) + 63) &
+                                             ~uintptr_t(63));
+  EngineOptions opt;
+  opt.memory = aligned;
+  opt.memory_bytes = *need;
+  opt.lock_memory = false;
+  auto e = Engine::load_memory(b.data(), b.size(), opt);
+  ASSERT_TRUE(e) << e.error().message();
+  EXPECT_TRUE((*e)->memory().caller_memory);
+  fill_input(**e);
+  ASSERT_TRUE((*e)->run());
+  const auto* in = static_cast<uint8_t*>((*e)->input().data);
+  EXPECT_GE(in, aligned);
+  EXPECT_LT(in, aligned + *need);
+
+  opt.memory_bytes = *need - 1;
+  auto small = Engine::load_memory(b.data(), b.size(), opt);
+  ASSERT_FALSE(small);
+  EXPECT_EQ(small.error().code(), Errc::kInvalidArgument);
+  opt.memory = aligned + 4;
+  opt.memory_bytes = *need;
+  auto misaligned = Engine::load_memory(b.data(), b.size(), opt);
+  ASSERT_FALSE(misaligned);
+  EXPECT_NE(std::strstr(misaligned.error().message(), "aligned"), nullptr);
+}
+
+TEST(Engine, RefusesWrongModality) {
+  const auto b = test::make_small_model();
+  EngineOptions opt;
+  opt.expect_modality = uint32_t(format::Modality::kLidarBev);
+  auto e = Engine::load_memory(b.data(), b.size(), opt);
+  ASSERT_FALSE(e);
+  EXPECT_EQ(e.error().code(), Errc::kWrongTarget);
+  EXPECT_NE(std::strstr(e.error().message(), "modality 'image'"), nullptr);
+}
+
+TEST(Engine, ReportsMemoryPlan) {
+  const auto b = test::make_small_model();
+  auto e = Engine::load_memory(b.data(), b.size());
+  ASSERT_TRUE(e);
+  const MemoryReport& m = (*e)->memory();
+  EXPECT_GT(m.arena_bytes, 0u);
+  EXPECT_LE(m.arena_bytes, m.arena_sum_bytes);
+  EXPECT_GE(m.arena_bytes, m.arena_lower_bound_bytes);
+  EXPECT_EQ(m.total_bytes, m.image_bytes + m.arena_bytes + m.scratch_bytes);
+}
+
+TEST(Engine, LoadFileReportsMissingFile) {
+  auto e = Engine::load_file("/nonexistent/model.aprt");
+  ASSERT_FALSE(e);
+  EXPECT_EQ(e.error().code(), Errc::kIo);
+  EXPECT_NE(std::strstr(e.error().message(), "cannot open"), nullptr);
+}
+
+}  // namespace
+}  // namespace aprt

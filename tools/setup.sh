@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# aprt set-up on Debian 12: installs every package the build, the tools and the
+# tests need (idempotent, non-interactive), then configures and builds the
+# `release` and `asan` presets. Run from anywhere; needs root or sudo for apt.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+PACKAGES=(
+  # build
+  build-essential cmake ninja-build pkg-config git
+  # tests, sanitizers, fuzzing, formatting
+  libgtest-dev libgmock-dev libbenchmark-dev clang clang-format libclang-rt-14-dev
+  # Python tools (Debian's interpreter at /usr/bin/python3)
+  python3 python3-numpy python3-torch python3-onnx python3-matplotlib
+  # torch links libblas.so.3: OpenBLAS instead of the 10x slower reference BLAS
+  libopenblas0-pthread
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  echo "setup: installing ${missing[*]}"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# Check what PLATFORM.md warns about: torch on the reference BLAS is ~10x slower.
+if ! update-alternatives --query libblas.so.3-x86_64-linux-gnu 2>/dev/null | grep -q "^Value: .*openblas"; then
+  echo "setup: warning: libblas.so.3 does not point at OpenBLAS; PyTorch tools will be slow" >&2
+fi
+/usr/bin/python3 -c "import torch, onnx, numpy" || {
+  echo "setup: /usr/bin/python3 cannot import torch/onnx/numpy" >&2
+  exit 1
+}
+
+jobs=$(nproc)
+for preset in release asan; do
+  cmake --preset "$preset" >/dev/null
+  cmake --build --preset "$preset" -j "$jobs"
+done
+echo "setup: done (build/release/bin/aprt, build/asan/bin/aprt)"
