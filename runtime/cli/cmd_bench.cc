@@ -46,6 +46,8 @@ int cmd_bench(int argc, char** argv) {
         "  --runs N      timed runs (default 50)\n"
         "  --warmup N    untimed runs first (default 5)\n"
         "  --seed S      seed of the random input (default 1)\n"
+        "  --threads N   threads for one frame, including the caller (default 1)\n"
+        "  --isa NAME    kernels: auto (default), ref, avx512, avx2, neon\n"
         "  --profile     time every op; print the ops that take the most time\n"
         "  --json        one JSON object on stdout instead of text\n");
     return 0;
@@ -55,6 +57,8 @@ int cmd_bench(int argc, char** argv) {
   const long runs = args.integer("--runs", 50, 1, 1000000);
   const long warmup = args.integer("--warmup", 5, 0, 1000000);
   const long seed = args.integer("--seed", 1, 0, 1L << 30);
+  const long threads = args.integer("--threads", 1, 1, 16);
+  const char* isa = args.value("--isa");
   const char* path = args.positional();
   if (args.error() || !path || args.leftover()) {
     std::fprintf(stderr, "aprt bench: %s%s\n",
@@ -62,7 +66,10 @@ int cmd_bench(int argc, char** argv) {
                  args.error() ? args.error() : "");
     return 2;
   }
-  auto loaded = Engine::load_file(path);
+  EngineOptions opts;
+  opts.threads = int(threads);
+  opts.isa = isa;
+  auto loaded = Engine::load_file(path, opts);
   if (!loaded) {
     std::fprintf(stderr, "aprt bench: %s\n", loaded.error().message());
     return 2;
@@ -99,15 +106,19 @@ int cmd_bench(int argc, char** argv) {
         "%.4f, \"p99_ms\": %.4f, \"max_ms\": %.4f, \"allocations_during_runs\": %llu, "
         "\"allocations_cover_malloc\": %s, \"arena_bytes\": %zu, \"weight_bytes\": %zu, "
         "\"scratch_bytes\": %zu, \"total_bytes\": %zu, \"memory_locked\": %s, "
-        "\"peak_rss_kb\": %ld, \"gflop_per_frame\": %.4f, \"gflops\": %.3f, \"threads\": 1}\n",
+        "\"peak_rss_kb\": %ld, \"gflop_per_frame\": %.4f, \"gflops\": %.3f, \"threads\": %d, "
+        "\"isa\": \"%s\", \"ms\": [",
         path, runs, warmup, sorted.front(), med, p99, sorted.back(),
         static_cast<unsigned long long>(allocs),
         allocation_counter_covers_malloc() ? "true" : "false", r.arena_bytes, r.weight_bytes,
         r.scratch_bytes, r.total_bytes, r.locked ? "true" : "false", peak_rss_kb(), gflops,
-        gflops / (med / 1e3));
+        gflops / (med / 1e3), e.threads(), e.isa());
+    for (size_t i = 0; i < ms.size(); ++i) std::printf("%s%.4f", i ? ", " : "", ms[i]);
+    std::printf("]}\n");
   } else {
     std::printf("model        %s\n", path);
-    std::printf("runs         %ld after %ld warm-up, 1 thread\n", runs, warmup);
+    std::printf("runs         %ld after %ld warm-up, %d thread%s, %s kernels\n", runs, warmup,
+                e.threads(), e.threads() > 1 ? "s" : "", e.isa());
     std::printf("latency      min %.3f  median %.3f  p99 %.3f  max %.3f ms\n", sorted.front(), med,
                 p99, sorted.back());
     std::printf("throughput   %.2f GFLOP/s (%.3f GFLOP per frame)\n", gflops / (med / 1e3), gflops);

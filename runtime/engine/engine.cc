@@ -11,7 +11,11 @@
 #include <ctime>
 #include <new>
 
+#include <cstdlib>
+
 #include "runtime/common/check.h"
+#include "runtime/engine/denormals.h"
+#include "runtime/engine/kernel_select.h"
 #include "runtime/engine/memory_planner.h"
 
 namespace aprt {
@@ -136,6 +140,12 @@ Expected<std::unique_ptr<Engine>> Engine::build(const uint8_t* data, size_t size
                                                 size_t* required) {
   std::unique_ptr<Engine> e(new (std::nothrow) Engine());
   APRT_ENSURE(e != nullptr, Errc::kOutOfMemory, "engine: out of memory");
+  APRT_ENSURE(options.threads >= 1 && options.threads <= ThreadPool::kMaxThreads,
+              Errc::kInvalidArgument, "engine: %d threads (1..%d)", options.threads,
+              ThreadPool::kMaxThreads);
+  auto ks = select_kernels(options.isa ? options.isa : std::getenv("APRT_ISA"));
+  if (!ks) return ks.error();
+  e->ks_ = ks.value();
   if (Status s = e->bind(data, size); !s) return s.error();
   if (options.expect_modality != 0) {
     const auto m = uint32_t(e->model_.meta().modality);
@@ -144,17 +154,27 @@ Expected<std::unique_ptr<Engine>> Engine::build(const uint8_t* data, size_t size
                 format::modality_name(e->model_.meta().modality),
                 format::modality_name(format::Modality(options.expect_modality)));
   }
+  for (OpNode& n : e->nodes_) {
+    n.ks = e->ks_;
+    n.threads = options.threads;
+  }
   if (Status s = e->prepare_ops(); !s) return s.error();
   size_t arena = 0;
   e->plan(&arena);
-  size_t scratch_floats = 0;
-  for (const OpNode& n : e->nodes_) scratch_floats = std::max(scratch_floats, n.scratch_floats);
   MemoryReport& m = e->memory_;
+  m.packed_bytes = 0;
+  for (const OpNode& n : e->nodes_) {
+    e->scratch_floats_ = std::max(e->scratch_floats_, n.scratch_floats);
+    e->thread_scratch_floats_ = std::max(e->thread_scratch_floats_, n.thread_scratch_floats);
+    m.packed_bytes += round_up(n.packed_floats * sizeof(float), kAlign);
+  }
   m.image_bytes = round_up(size, kAlign);
   m.weight_bytes = 0;
   for (const Tensor& t : e->tensors_) m.weight_bytes += t.is_const() ? t.bytes : 0;
-  m.scratch_bytes = round_up(scratch_floats * sizeof(float), kAlign);
-  m.total_bytes = m.image_bytes + round_up(arena, kAlign) + m.scratch_bytes;
+  m.scratch_bytes = round_up(e->scratch_floats_ * sizeof(float), kAlign) +
+                    size_t(options.threads) *
+                        round_up(e->thread_scratch_floats_ * sizeof(float), kAlign);
+  m.total_bytes = m.image_bytes + m.packed_bytes + round_up(arena, kAlign) + m.scratch_bytes;
   if (required) *required = m.total_bytes;
   (void)plan_only;  // both passes plan; only the caller decides what to keep
   return e;
@@ -211,13 +231,40 @@ Expected<std::unique_ptr<Engine>> Engine::load_memory(const uint8_t* data, size_
   e->region_owned_ = owned;
   MemoryReport& m = e->memory_;
   m.caller_memory = !owned;
-  uint8_t* arena = region + m.image_bytes;
+  // Bind: packed weights, then the arena, then the scratch areas.
+  uint8_t* cursor = region + m.image_bytes;
+  for (OpNode& n : e->nodes_) {
+    if (!n.packed_floats) continue;
+    n.packed = reinterpret_cast<float*>(cursor);
+    cursor += round_up(n.packed_floats * sizeof(float), kAlign);
+  }
+  uint8_t* arena = cursor;
   for (size_t i = 0; i < e->tensors_.size(); ++i) {
     if (e->arena_offsets_[i] != kNotInArena) e->tensors_[i].data = arena + e->arena_offsets_[i];
   }
-  e->scratch_ = reinterpret_cast<float*>(arena + round_up(m.arena_bytes, kAlign));
-  // Prefault: every page of the arena and scratch is written once here, not during run().
-  std::memset(arena, 0, required - m.image_bytes);
+  cursor = arena + round_up(m.arena_bytes, kAlign);
+  // Prefault: every page after the image is written once here, not during run().
+  std::memset(region + m.image_bytes, 0, required - m.image_bytes);
+  e->ctx_.scratch = reinterpret_cast<float*>(cursor);
+  cursor += round_up(e->scratch_floats_ * sizeof(float), kAlign);
+  for (int t = 0; t < options.threads; ++t) {
+    e->ctx_.thread_scratch[t] = reinterpret_cast<float*>(cursor);
+    cursor += round_up(e->thread_scratch_floats_ * sizeof(float), kAlign);
+  }
+  for (OpNode& n : e->nodes_) {
+    if (n.pack) n.pack(n);
+  }
+  if (options.threads > 1) {
+    auto pool = ThreadPool::create(options.threads, options.cpus, options.n_cpus);
+    if (!pool) {
+      e.reset();
+      if (owned) munmap(region, required);
+      return pool.error();
+    }
+    e->pool_ = std::move(pool.value());
+    e->ctx_.pool = e->pool_.get();
+    e->ctx_.threads = options.threads;
+  }
   if (options.lock_memory) {
     if (mlock(region, required) == 0) {
       m.locked = true;
@@ -268,22 +315,28 @@ Expected<std::unique_ptr<Engine>> Engine::load_file(const char* path,
 }
 
 Status Engine::run() noexcept {
-  RunContext ctx{scratch_};
-  for (const OpNode& n : nodes_) n.eval(n, ctx);
+  const DenormalsAreZero ftz;
+  if (pool_) pool_->frame_begin();
+  for (const OpNode& n : nodes_) n.eval(n, ctx_);
+  if (pool_) pool_->frame_end();
   return ok();
 }
 
 Status Engine::run_profiled(uint64_t* op_nanos) noexcept {
-  RunContext ctx{scratch_};
+  const DenormalsAreZero ftz;
+  if (pool_) pool_->frame_begin();
   for (size_t i = 0; i < nodes_.size(); ++i) {
     timespec a{}, b{};
     clock_gettime(CLOCK_MONOTONIC, &a);
-    nodes_[i].eval(nodes_[i], ctx);
+    nodes_[i].eval(nodes_[i], ctx_);
     clock_gettime(CLOCK_MONOTONIC, &b);
     op_nanos[i] = uint64_t(b.tv_sec - a.tv_sec) * 1000000000ull + uint64_t(b.tv_nsec - a.tv_nsec);
   }
+  if (pool_) pool_->frame_end();
   return ok();
 }
+
+const char* Engine::isa() const { return kernel_set_name(ks_); }
 
 uint64_t Engine::total_flops() const {
   uint64_t f = 0;

@@ -4,11 +4,12 @@
 // plans the activation arena from tensor lifetimes and then takes all the
 // memory it will ever use in one piece (or uses the caller's buffer):
 //
-//   [ model image (weights, tables) | activation arena | scratch ]
+//   [ model image (weights, tables) | packed weights | activation arena | scratch ]
 //
 // It prefaults and (best effort, or required) locks that memory. After load()
-// returns, run() allocates nothing, takes no locks, makes no system calls and
-// does a fixed amount of work; on one thread it is bit-for-bit deterministic.
+// returns, run() allocates nothing, takes no locks and does a fixed amount of
+// work; its only system call is a futex wake of sleeping workers when
+// threads > 1. Results are bit-for-bit identical for every thread count.
 //
 // Thread safety: one Engine runs one frame at a time; input()/output() belong to
 // the thread calling run().
@@ -23,6 +24,7 @@
 #include "runtime/engine/model_file.h"
 #include "runtime/engine/op_node.h"
 #include "runtime/engine/tensor.h"
+#include "runtime/engine/thread_pool.h"
 
 namespace aprt {
 
@@ -38,11 +40,19 @@ struct EngineOptions {
   // Section checksums are always verified on vehicles; fuzzers turn this off to
   // reach the checks behind them.
   bool verify_checksums = true;
+  // Kernels: null = $APRT_ISA, else auto; or "auto", "ref", "avx512", "avx2", "neon".
+  const char* isa = nullptr;
+  // Threads for one run(), including the caller (1..16). Workers are created
+  // at load and pinned to cpus[0..n_cpus) if given.
+  int threads = 1;
+  const int* cpus = nullptr;
+  int n_cpus = 0;
 };
 
 struct MemoryReport {
   size_t image_bytes = 0;              // the model file as loaded (weights + tables)
   size_t weight_bytes = 0;             // constant tensors
+  size_t packed_bytes = 0;             // weights repacked for the kernels at load
   size_t arena_bytes = 0;              // activation arena as planned
   size_t arena_sum_bytes = 0;          // sum of all activation tensors (no reuse)
   size_t arena_lower_bound_bytes = 0;  // largest set of simultaneously live tensors
@@ -79,6 +89,8 @@ class Engine {
   const ModelMeta& meta() const { return model_.meta(); }
   const ModelFile& model() const { return model_; }
   const MemoryReport& memory() const { return memory_; }
+  const char* isa() const;  // the kernels chosen at load ("avx512", "ref", ...)
+  int threads() const { return pool_ ? pool_->threads() : 1; }
   size_t op_count() const { return nodes_.size(); }
   const OpNode& op(size_t i) const { return nodes_[i]; }
   size_t tensor_count() const { return tensors_.size(); }
@@ -100,10 +112,14 @@ class Engine {
   std::vector<size_t> arena_offsets_;  // per tensor; SIZE_MAX if not in the arena
   Tensor* input_ = nullptr;
   Tensor* output_ = nullptr;
-  uint8_t* region_ = nullptr;  // image | arena | scratch
+  uint8_t* region_ = nullptr;  // image | packed | arena | scratch
   size_t region_bytes_ = 0;
   bool region_owned_ = false;
-  float* scratch_ = nullptr;
+  const kernels::KernelSet* ks_ = nullptr;
+  std::unique_ptr<ThreadPool> pool_;
+  RunContext ctx_;
+  size_t scratch_floats_ = 0;         // shared, max over ops
+  size_t thread_scratch_floats_ = 0;  // per thread, max over ops
   MemoryReport memory_;
 };
 

@@ -46,6 +46,7 @@ const char* op_name(OpCode code) noexcept {
     case OpCode::kAttention: return "ATTENTION";
     case OpCode::kActivation: return "ACTIVATION";
     case OpCode::kConcat: return "CONCAT";
+    case OpCode::kCrossAttention1q: return "CROSS_ATTENTION_1Q";
   }
   return "?";
 }

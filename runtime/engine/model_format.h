@@ -53,8 +53,9 @@ enum class OpCode : uint16_t {
   kAttention = 7,
   kActivation = 8,
   kConcat = 9,
+  kCrossAttention1q = 10,
 };
-inline constexpr uint16_t kMaxOpCode = 9;
+inline constexpr uint16_t kMaxOpCode = 10;
 
 enum class Act : int32_t { kNone = 0, kSilu = 1, kGelu = 2, kSigmoid = 3, kRelu = 4 };
 inline constexpr int32_t kMaxAct = 4;

@@ -37,7 +37,8 @@ class SpecAgreement(unittest.TestCase):
     def test_enums(self):
         cc_names = {"kConv2d": "CONV2D", "kDwConv2d": "DWCONV2D", "kLinear": "LINEAR",
                     "kSqueezeExcite": "SQUEEZE_EXCITE", "kAdd": "ADD", "kLayerNorm": "LAYERNORM",
-                    "kAttention": "ATTENTION", "kActivation": "ACTIVATION", "kConcat": "CONCAT"}
+                    "kAttention": "ATTENTION", "kActivation": "ACTIVATION", "kConcat": "CONCAT",
+                    "kCrossAttention1q": "CROSS_ATTENTION_1Q"}
         ops = enum_values(self.h, "OpCode")
         self.assertEqual({cc_names[k]: v for k, v in ops.items()},
                          {n: c for c, n in spec.OP_NAMES.items()})

@@ -109,7 +109,7 @@ TEST(Engine, ReportsMemoryPlan) {
   EXPECT_GT(m.arena_bytes, 0u);
   EXPECT_LE(m.arena_bytes, m.arena_sum_bytes);
   EXPECT_GE(m.arena_bytes, m.arena_lower_bound_bytes);
-  EXPECT_EQ(m.total_bytes, m.image_bytes + m.arena_bytes + m.scratch_bytes);
+  EXPECT_EQ(m.total_bytes, m.image_bytes + m.packed_bytes + m.arena_bytes + m.scratch_bytes);
 }
 
 TEST(Engine, LoadFileReportsMissingFile) {

@@ -9,12 +9,24 @@ namespace {
 struct LnState {
   int rows, n;
   float eps;
+  Split split;
 };
 
 void eval_layernorm_ref(const OpNode& node, const RunContext&) {
   const auto& s = node.state_as<LnState>();
-  kernels::f32_layernorm__ref(s.rows, s.n, node.in[0]->f32(), node.in[1]->f32(), node.in[2]->f32(),
-                              s.eps, node.out[0]->f32());
+  kernels::f32_layernorm__ref(s.rows, s.n, node.in[0]->f32(), node.in[1]->f32(),
+                              node.in[2]->f32(), s.eps, node.out[0]->f32());
+}
+
+void ln_task(void* data, int task, int) {
+  const auto& node = *static_cast<const OpNode*>(data);
+  const auto& s = node.state_as<LnState>();
+  node.ks->layernorm_rows(s.n, node.in[0]->f32(), node.in[1]->f32(), node.in[2]->f32(), s.eps,
+                          node.out[0]->f32(), s.split.begin(task), s.split.end(task));
+}
+
+void eval_layernorm_fast(const OpNode& node, const RunContext& ctx) {
+  parallel_for(ctx, node.state_as<LnState>().split.tasks, ln_task, const_cast<OpNode*>(&node));
 }
 
 }  // namespace
@@ -36,9 +48,21 @@ Status prepare_layernorm(OpNode& node) {
   const float eps = param_f32(node, 0);
   APRT_OP_ENSURE(node, std::isfinite(eps) && eps > 0.0f && eps < 1.0f, Errc::kBadOp,
                  "epsilon %g outside (0, 1)", eps);
-  node.state_as<LnState>() = {int(x->rows()), n, eps};
+  auto& s = node.state_as<LnState>();
+  s.rows = int(x->rows());
+  s.n = n;
+  s.eps = eps;
   node.flops = 8ull * x->numel;
-  node.eval = eval_layernorm_ref;
+  if (node.ks) {
+    const int min_rows = 16384 / n + 1;
+    int tasks = node.threads <= 1 ? 1 : 2 * node.threads;
+    if (tasks > s.rows / min_rows) tasks = s.rows / min_rows;
+    s.split = make_split(s.rows, 1, tasks < 1 ? 1 : tasks);
+    node.eval = eval_layernorm_fast;
+    node.kernel = node.ks->isa;
+  } else {
+    node.eval = eval_layernorm_ref;
+  }
   return ok();
 }
 

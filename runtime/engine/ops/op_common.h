@@ -32,4 +32,10 @@ inline float param_f32(const OpNode& node, int i) {
 
 Status expect_act(const OpNode& node, int32_t act);
 
+// Tasks for an m x n x k product: enough to keep `threads` busy, none much
+// smaller than 64k multiply-adds. rows: in rows, whole mr tiles; panels: in
+// nr-column panels. Task t covers rows.begin(t % rows.tasks) and panels
+// .begin(t / rows.tasks).
+void split_gemm(int m, int n, int k, int mr, int nr, int threads, Split* rows, Split* panels);
+
 }  // namespace aprt::ops

@@ -15,6 +15,7 @@ constexpr OpKind kKinds[] = {
     {"ATTENTION", 3, 3, ops::prepare_attention},
     {"ACTIVATION", 1, 1, ops::prepare_activation},
     {"CONCAT", 1, format::kMaxOpInputs, ops::prepare_concat},
+    {"CROSS_ATTENTION_1Q", 7, 7, ops::prepare_cross_attention_1q},
 };
 static_assert(sizeof(kKinds) / sizeof(kKinds[0]) == format::kMaxOpCode);
 

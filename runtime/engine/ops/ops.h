@@ -14,5 +14,6 @@ Status prepare_layernorm(OpNode& node);
 Status prepare_attention(OpNode& node);
 Status prepare_activation(OpNode& node);
 Status prepare_concat(OpNode& node);
+Status prepare_cross_attention_1q(OpNode& node);
 
 }  // namespace aprt::ops

@@ -46,15 +46,20 @@ def _rel(ref, got) -> float:
 
 def _infer_architecture(eg) -> dict:
     att = [op for op in eg.ops if op.code == spec.OP_ATTENTION]
-    if not att:
+    cross = [op for op in eg.ops if op.code == spec.OP_CROSS_ATTENTION_1Q]
+    if not att and not cross:
         raise UnsupportedOnnx("the graph has no attention: not an APR-Transformer")
-    e = att[0].inputs[0].shape[-1]
-    heads = att[0].params["heads"]
-    lens = [(int(np.prod(op.inputs[0].shape[:-1])), int(np.prod(op.inputs[1].shape[:-1])))
-            for op in att]
-    enc = sum(1 for lq, lk in lens if lq == lk and lq > 1)
-    cross = sum(1 for lq, lk in lens if lq == 1 and lk > 1)
-    return dict(d_model=e, nheads=heads, enc_layers=enc // 2, dec_layers=cross // 2)
+    first = (att or cross)[0]
+    e = first.inputs[0].shape[-1]
+    heads = first.params["heads"]
+    enc = sum(1 for op in att if _rows(op.inputs[0]) == _rows(op.inputs[1]) > 1)
+    cross_count = len(cross) + sum(1 for op in att if _rows(op.inputs[0]) == 1 and
+                                   _rows(op.inputs[1]) > 1)
+    return dict(d_model=e, nheads=heads, enc_layers=enc // 2, dec_layers=cross_count // 2)
+
+
+def _rows(t) -> int:
+    return int(np.prod(t.shape[:-1]))
 
 
 def build_meta(eg, source: bytes, source_name: str, config: dict | None, overrides: dict) -> dict:

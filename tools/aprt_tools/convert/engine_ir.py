@@ -145,6 +145,23 @@ def run_op(op: Op, get) -> list:
         s = np.exp(s - s.max(axis=-1, keepdims=True))
         s /= s.sum(axis=-1, keepdims=True)
         y = (s @ v).transpose(1, 0, 2).reshape(-1, e)
+    elif c == spec.OP_CROSS_ATTENTION_1Q:
+        q, m, pos, wk, bk, wv, bv = ins
+        h = p["heads"]
+        e = wk.shape[0]
+        d = e // h
+        mem = m.reshape(-1, e)
+        keys = mem + (pos.reshape(-1, e) if pos is not None else 0.0)
+        q = q.reshape(e)
+        out = np.empty(e)
+        for hh in range(h):
+            sl = slice(hh * d, (hh + 1) * d)
+            qt = p["scale"] * (q[sl] @ wk[sl])  # W_k,h^T q_h; the bias term cancels in softmax
+            s = keys @ qt
+            a = np.exp(s - s.max())
+            a /= a.sum()
+            out[sl] = wv[sl] @ (a @ mem) + bv[sl]
+        y = out
     elif c == spec.OP_ACTIVATION:
         y = activation(ins[0], p["act"])
     elif c == spec.OP_CONCAT:

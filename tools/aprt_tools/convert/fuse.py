@@ -1,5 +1,13 @@
-"""Engine-level fusions: epilogues folded into the op that produces their input.
+"""Engine-level rewrites: single-query attention algebra, and epilogues folded
+into the op that produces their input.
 
+- Attention with one query over one key is its value: the op disappears (and
+  with it the query and key projections).
+- Attention with one query over many keys whose keys and values are
+  projections of the same memory becomes CROSS_ATTENTION_1Q, which never
+  projects the memory: score_h = (W_k,h^T q_h) . (m + pos) (the key bias adds
+  the same to every score and cancels in the softmax), out_h = W_v,h (sum_j
+  a_j m_j) + b_v,h (the weights sum to one).
 - ACTIVATION after CONV2D / DWCONV2D / LINEAR becomes that op's `act`.
 - ADD of two activations becomes the `residual` input of the later producer
   (CONV2D or LINEAR), added after its activation.
@@ -93,8 +101,72 @@ def fuse_constant_adds(eg: EngineGraph) -> bool:
     return False
 
 
-def fuse(eg: EngineGraph) -> None:
-    for step in (fuse_activations, fuse_residuals, fuse_constant_adds):
+def _rows(t) -> int:
+    return int(np.prod(t.shape[:-1]))
+
+
+def _plain_linear(eg: EngineGraph, t, reader: Op):
+    """The LINEAR (no activation, no residual) writing `t`, if `reader` is its only reader."""
+    op = eg.producer(t)
+    if op is None or op.code != spec.OP_LINEAR or op.params.get("act", 0) or _has_residual(op):
+        return None
+    return op if _sole_reader(eg, t, reader) else None
+
+
+def _redirect(eg: EngineGraph, old, new):
+    for op in eg.ops:
+        op.inputs = [new if t is old else t for t in op.inputs]
+    if old.kind == spec.KIND_OUTPUT:
+        raise ValueError("cannot redirect a graph output")
+
+
+def single_query_attention(eg: EngineGraph) -> bool:
+    for op in eg.ops:
+        if op.code != spec.OP_ATTENTION or _rows(op.inputs[0]) != 1:
+            continue
+        q, k, v = op.inputs
+        out = op.outputs[0]
+        if _rows(k) == 1 and out.kind == spec.KIND_ACTIVATION:
+            # softmax over a single key is exactly 1: the output is the value row.
+            eg.ops.remove(op)
+            _redirect(eg, out, v)
+            return True
+        kl, vl = _plain_linear(eg, k, op), _plain_linear(eg, v, op)
+        if kl is None or vl is None:
+            continue
+        memory = vl.inputs[0]
+        key_in = kl.inputs[0]
+        pos, add = None, None
+        if key_in is not memory:
+            # key input = memory + pos; the sum may be shared by several layers' key
+            # projections (it stays until its last reader is fused).
+            add = eg.producer(key_in)
+            if add is None or add.code != spec.OP_ADD or memory not in add.inputs:
+                continue
+            pos = add.inputs[1] if add.inputs[0] is memory else add.inputs[0]
+        fused = Op(spec.OP_CROSS_ATTENTION_1Q, op.name,
+                   [q, memory, pos, kl.inputs[1], kl.inputs[2], vl.inputs[1], vl.inputs[2]],
+                   [out], dict(heads=op.params["heads"], scale=op.params["scale"]))
+        at = eg.ops.index(op)
+        eg.ops[at] = fused
+        eg.ops.remove(kl)
+        eg.ops.remove(vl)  # a shared memory + pos is left to remove_dead_ops
+        return True
+    return False
+
+
+def remove_dead_ops(eg: EngineGraph) -> bool:
+    for op in reversed(eg.ops):
+        t = op.outputs[0]
+        if t.kind != spec.KIND_OUTPUT and not eg.users(t):
+            eg.ops.remove(op)
+            return True
+    return False
+
+
+def fuse(eg: EngineGraph, single_query: bool = True) -> None:
+    steps = (single_query_attention, remove_dead_ops) if single_query else ()
+    for step in steps + (fuse_activations, fuse_residuals, fuse_constant_adds, remove_dead_ops):
         while step(eg):
             pass
     eg.prune()

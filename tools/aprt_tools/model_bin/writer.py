@@ -67,7 +67,7 @@ def _op_params(op) -> list:
         return [p.get("act", 0)]
     if c == spec.OP_LAYERNORM:
         return [f(p["eps"])]
-    if c == spec.OP_ATTENTION:
+    if c in (spec.OP_ATTENTION, spec.OP_CROSS_ATTENTION_1Q):
         return [p["heads"], f(p["scale"])]
     if c == spec.OP_ACTIVATION:
         return [p["act"]]

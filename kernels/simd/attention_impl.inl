@@ -1,0 +1,231 @@
+// Fused multi-head attention with an online softmax (the FlashAttention
+// scheme): for a block of R query rows, key blocks of KB keys are scored into
+// a small buffer, the running row maximum and sum are updated, and the output
+// rows are rescaled and accumulated. No Lq x Lk matrix is ever stored.
+// K and V are first packed per head (attn_pack_kv): K^T so that keys are the
+// vector dimension of the scoring loop, both contiguous per key block. Included inside an ISA
+// namespace (after vmath.inl).
+
+constexpr int kAttnKB = 128;  // keys per softmax block
+static const float kOnesAttn[16] = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};
+
+// Packs head h of K and V for attn_block: K^T in blocks of kAttnKB keys
+// (kt_h[block][p][j], so a block's scoring reads 16 KB of contiguous memory at
+// d = 32), and V as a dense [lk_pad][d] (one head's rows back to back).
+// lk_pad is a multiple of kAttnKB; padded keys are zero.
+static void attn_pack_kv(int kv_len, int lk_pad, int d, const float* k, size_t ldk,
+                         const float* v, size_t ldv, int h, float* kt, float* vp) {
+  float* kdst = kt + size_t(h) * d * lk_pad;
+  float* vdst = vp + size_t(h) * d * lk_pad;
+  for (int j = 0; j < lk_pad; ++j) {
+    const int blk = j / kAttnKB, jj = j % kAttnKB;
+    float* kb = kdst + size_t(blk) * d * kAttnKB + jj;
+    float* vr = vdst + size_t(j) * d;
+    if (j < kv_len) {
+      const float* kr = k + size_t(j) * ldk + size_t(h) * d;
+      const float* vs = v + size_t(j) * ldv + size_t(h) * d;
+      for (int p = 0; p < d; ++p) {
+        kb[size_t(p) * kAttnKB] = kr[p];
+        vr[p] = vs[p];
+      }
+    } else {
+      for (int p = 0; p < d; ++p) {
+        kb[size_t(p) * kAttnKB] = 0.0f;
+        vr[p] = 0.0f;
+      }
+    }
+  }
+}
+
+// Query rows per task chunk: a key block's K^T and V (32 KB at d = 32) stay in
+// L1 while every row group of the chunk uses them.
+constexpr int kAttnChunk = 256;
+
+// Floats of per-thread scratch attn_block needs for head width dv vectors.
+static inline size_t attn_thread_scratch(int rows, int dv) {
+  return size_t(rows) * kAttnKB + size_t(kAttnChunk) * (size_t(dv) * kLanes + 2);
+}
+
+// One group of R query rows against one key block [j0, j0 + kb): scores,
+// online-softmax update, and P V accumulated into obuf (rows of DV vectors).
+template <int R, int SV, int DV>
+static inline void attn_group(int kb, int d, const float* qh, size_t ldq, const float* kp,
+                              const float* vh, size_t ldv, V vscale, const int* dcnt,
+                              float* sbuf, float* obuf, float* mrow, float* lrow) {
+  constexpr int KS = SV * kLanes;
+  static_assert(kAttnKB % KS == 0, "key block must hold whole scoring sub-blocks");
+  // Scores: sbuf[r][j] = scale * q_r . k_j
+  for (int js = 0; js < kb; js += KS) {
+    V acc[R][SV];
+#pragma GCC unroll 8
+    for (int r = 0; r < R; ++r) {
+#pragma GCC unroll 4
+      for (int t = 0; t < SV; ++t) acc[r][t] = vzero();
+    }
+    for (int p = 0; p < d; ++p) {
+      V kv[SV];
+#pragma GCC unroll 4
+      for (int t = 0; t < SV; ++t) kv[t] = vload(kp + size_t(p) * kAttnKB + js + t * kLanes);
+#pragma GCC unroll 8
+      for (int r = 0; r < R; ++r) {
+        const V qv = vset1(qh[size_t(r) * ldq + p]);
+#pragma GCC unroll 4
+        for (int t = 0; t < SV; ++t) acc[r][t] = vfmadd(qv, kv[t], acc[r][t]);
+      }
+    }
+#pragma GCC unroll 8
+    for (int r = 0; r < R; ++r) {
+#pragma GCC unroll 4
+      for (int t = 0; t < SV; ++t) {
+        vstore(sbuf + r * kAttnKB + js + t * kLanes, vmul(acc[r][t], vscale));
+      }
+    }
+  }
+  // New row maxima; the rescale factors of all R rows in one vector exp.
+  const int kb_vec = (kb + kLanes - 1) / kLanes * kLanes;
+  float diff[R < kLanes ? kLanes : R];
+  for (int r = 0; r < R; ++r) {
+    float* srow = sbuf + r * kAttnKB;
+    for (int j = kb; j < kb_vec; ++j) srow[j] = -__builtin_inff();
+    V mx = vload(srow);
+    for (int j = kLanes; j < kb_vec; j += kLanes) mx = vmax(mx, vload(srow + j));
+    const float m_blk = vreduce_max(mx);
+    const float m_new = mrow[r] > m_blk ? mrow[r] : m_blk;
+    diff[r] = mrow[r] - m_new;
+    mrow[r] = m_new;
+  }
+  for (int r0 = 0; r0 < R; r0 += kLanes) {
+    const int c = R - r0 < kLanes ? R - r0 : kLanes;
+    vstore_n(diff + r0, vexp(vload_n(diff + r0, c)), c);  // alpha_r
+  }
+  // Exponentiate; rescale the sums and (in registers, below) the outputs.
+  for (int r = 0; r < R; ++r) {
+    float* srow = sbuf + r * kAttnKB;
+    const V mv = vset1(mrow[r]);
+    V sum = vzero();
+    int j = 0;
+    for (; j + kLanes <= kb; j += kLanes) {
+      const V e = vexp(vsub(vload(srow + j), mv));
+      vstore(srow + j, e);
+      sum = vadd(sum, e);
+    }
+    if (j < kb) {
+      const V e = vexp(vsub(vload_n(srow + j, kb - j), mv));
+      vstore_n(srow + j, e, kb - j);
+      sum = vadd(sum, vmul(e, vload_n(kOnesAttn, kb - j)));
+    }
+    lrow[r] = lrow[r] * diff[r] + vreduce_add(sum);
+  }
+  V oacc[R][DV];
+#pragma GCC unroll 8
+  for (int r = 0; r < R; ++r) {
+    const V av = vset1(diff[r]);
+#pragma GCC unroll 4
+    for (int t = 0; t < DV; ++t) oacc[r][t] = vmul(vload(obuf + (r * DV + t) * kLanes), av);
+  }
+  for (int jj = 0; jj < kb; ++jj) {
+    V vv[DV];
+#pragma GCC unroll 4
+    for (int t = 0; t < DV; ++t) {
+      vv[t] = dcnt[t] == kLanes ? vload(vh + size_t(jj) * ldv + t * kLanes)
+                                : vload_n(vh + size_t(jj) * ldv + t * kLanes, dcnt[t]);
+    }
+#pragma GCC unroll 8
+    for (int r = 0; r < R; ++r) {
+      const V pv = vset1(sbuf[r * kAttnKB + jj]);
+#pragma GCC unroll 4
+      for (int t = 0; t < DV; ++t) oacc[r][t] = vfmadd(pv, vv[t], oacc[r][t]);
+    }
+  }
+#pragma GCC unroll 8
+  for (int r = 0; r < R; ++r) {
+#pragma GCC unroll 4
+    for (int t = 0; t < DV; ++t) vstore(obuf + (r * DV + t) * kLanes, oacc[r][t]);
+  }
+}
+
+// Query rows [q0, q0 + rows) of head h (rows <= kAttnChunk): key blocks outer,
+// row groups of R inner.
+template <int R, int SV, int DV>
+static void attn_chunk(int rows, int kv_len, int d, const float* q, size_t ldq, const float* kt_h,
+                       const float* vp_h, float scale, float* o, size_t ldo, int h, int q0,
+                       float* scratch) {
+  float* sbuf = scratch;                          // [R][kAttnKB]
+  float* obuf = scratch + R * kAttnKB;            // [rows][DV * kLanes]
+  float* mrow = obuf + kAttnChunk * DV * kLanes;  // [rows]
+  float* lrow = mrow + kAttnChunk;                // [rows]
+  int dcnt[DV];
+#pragma GCC unroll 4
+  for (int t = 0; t < DV; ++t) {
+    const int left = d - t * kLanes;
+    dcnt[t] = left < 0 ? 0 : (left > kLanes ? kLanes : left);
+  }
+  for (int r = 0; r < rows; ++r) {
+    mrow[r] = -__builtin_inff();
+    lrow[r] = 0.0f;
+    for (int t = 0; t < DV; ++t) vstore(obuf + (r * DV + t) * kLanes, vzero());
+  }
+  const float* qh = q + size_t(q0) * ldq + size_t(h) * d;
+  const V vscale = vset1(scale);
+  for (int j0 = 0; j0 < kv_len; j0 += kAttnKB) {
+    const int kb = kv_len - j0 < kAttnKB ? kv_len - j0 : kAttnKB;
+    const float* kp = kt_h + size_t(j0) * d;  // block j0 / kAttnKB
+    const float* vh = vp_h + size_t(j0) * d;
+    const size_t ldv = size_t(d);
+    int g = 0;
+    for (; g + R <= rows; g += R) {
+      attn_group<R, SV, DV>(kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vscale, dcnt,
+                            sbuf, obuf + g * DV * kLanes, mrow + g, lrow + g);
+    }
+    const int left = rows - g;
+#define APRT_ATTN_TAIL(RR)                                                                      \
+  case RR:                                                                                      \
+    if constexpr (R > RR) {                                                                     \
+      attn_group<RR, SV, DV>(kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vscale, dcnt, sbuf, \
+                             obuf + g * DV * kLanes, mrow + g, lrow + g);                      \
+    }                                                                                           \
+    break;
+    switch (left) {
+      APRT_ATTN_TAIL(1)
+      APRT_ATTN_TAIL(2)
+      APRT_ATTN_TAIL(3)
+      APRT_ATTN_TAIL(4)
+      APRT_ATTN_TAIL(5)
+      APRT_ATTN_TAIL(6)
+      APRT_ATTN_TAIL(7)
+      default: break;
+    }
+#undef APRT_ATTN_TAIL
+  }
+  for (int r = 0; r < rows; ++r) {
+    const V inv = vset1(1.0f / lrow[r]);
+    float* orow = o + size_t(q0 + r) * ldo + size_t(h) * d;
+    for (int t = 0; t < DV; ++t) {
+      if (dcnt[t] == 0) continue;
+      vstore_n(orow + t * kLanes, vmul(vload(obuf + (r * DV + t) * kLanes), inv), dcnt[t]);
+    }
+  }
+}
+
+// Query rows [q0, q0 + rows) of head h, rows <= kAttnChunk, over K and V
+// packed by attn_pack_kv. Returns false if the head width needs more than 4
+// vectors (the caller then uses the reference kernel).
+template <int R, int SV>
+static bool attn_block(int rows, int kv_len, int d, const float* q, size_t ldq, const float* kt,
+                       const float* vp, int lk_pad, float scale, float* o, size_t ldo, int h,
+                       int q0, float* scratch) {
+  static_assert(R <= 8, "row groups are dispatched up to 8");
+  const float* kt_h = kt + size_t(h) * d * lk_pad;
+  const float* vp_h = vp + size_t(h) * d * lk_pad;
+#define APRT_ATTN_DV(DVV)                                                                 \
+  attn_chunk<R, SV, DVV>(rows, kv_len, d, q, ldq, kt_h, vp_h, scale, o, ldo, h, q0, scratch); \
+  return true;
+  switch ((d + kLanes - 1) / kLanes) {
+    case 1: APRT_ATTN_DV(1)
+    case 2: APRT_ATTN_DV(2)
+    case 3: APRT_ATTN_DV(3)
+    case 4: APRT_ATTN_DV(4)
+    default: return false;
+  }
+#undef APRT_ATTN_DV
+}

@@ -1,0 +1,98 @@
+// Depthwise NHWC convolution, vectorised over channels: per channel block the
+// KH x KW weight vectors stay in registers while the row's output pixels
+// stream through. Interior pixels run a fixed, unrolled kernel window; border
+// pixels clip it. Included inside an ISA namespace (after vmath.inl).
+
+template <int KH, int KW>
+static void dwconv_rows_k(const Conv2dShape& s, const float* x, const float* w, const float* bias,
+                          int act, float* y, int oy0, int oy1) {
+  const int C = s.in_c;
+  const int sw = s.stride_w;
+  // Output columns whose whole window is inside the input.
+  int ox_lo = (s.pad_left + sw - 1) / sw;
+  int ox_hi = s.in_w - KW + s.pad_left >= 0 ? (s.in_w - KW + s.pad_left) / sw + 1 : 0;
+  if (ox_hi > s.out_w) ox_hi = s.out_w;
+  if (ox_lo > ox_hi) ox_lo = ox_hi;
+  for (int oy = oy0; oy < oy1; ++oy) {
+    const int iy0 = oy * s.stride_h - s.pad_top;
+    const int ky_lo = iy0 < 0 ? -iy0 : 0;
+    const int ky_hi = s.in_h - iy0 < KH ? s.in_h - iy0 : KH;
+    for (int c0 = 0; c0 < C; c0 += kLanes) {
+      const int cn = C - c0 < kLanes ? C - c0 : kLanes;
+      const bool full = cn == kLanes;
+      V wv[KH][KW];
+#pragma GCC unroll 5
+      for (int ky = 0; ky < KH; ++ky) {
+#pragma GCC unroll 5
+        for (int kx = 0; kx < KW; ++kx) {
+          const float* wp = w + (ky * KW + kx) * C + c0;
+          wv[ky][kx] = full ? vload(wp) : vload_n(wp, cn);
+        }
+      }
+      const V bv = bias ? (full ? vload(bias + c0) : vload_n(bias + c0, cn)) : vzero();
+      float* yrow = y + size_t(oy) * s.out_w * C + c0;
+      for (int ox = 0; ox < s.out_w; ++ox) {
+        const int ix0 = ox * sw - s.pad_left;
+        V acc = bv;
+        if (ox >= ox_lo && ox < ox_hi && full) {
+          for (int ky = ky_lo; ky < ky_hi; ++ky) {
+            const float* xr = x + (size_t(iy0 + ky) * s.in_w + ix0) * C + c0;
+#pragma GCC unroll 5
+            for (int kx = 0; kx < KW; ++kx) acc = vfmadd(vload(xr + kx * C), wv[ky][kx], acc);
+          }
+        } else {
+          const int kx_lo = ix0 < 0 ? -ix0 : 0;
+          const int kx_hi = s.in_w - ix0 < KW ? s.in_w - ix0 : KW;
+          for (int ky = ky_lo; ky < ky_hi; ++ky) {
+            const float* xr = x + (size_t(iy0 + ky) * s.in_w + ix0) * C + c0;
+            for (int kx = kx_lo; kx < kx_hi; ++kx) {
+              const V xv = full ? vload(xr + kx * C) : vload_n(xr + kx * C, cn);
+              acc = vfmadd(xv, wv[ky][kx], acc);
+            }
+          }
+        }
+        if (act) acc = vact(acc, act);
+        if (full) {
+          vstore(yrow + size_t(ox) * C, acc);
+        } else {
+          vstore_n(yrow + size_t(ox) * C, acc, cn);
+        }
+      }
+    }
+  }
+}
+
+// Any kernel size: weights are reloaded from memory instead of registers.
+static void dwconv_rows_any(const Conv2dShape& s, const float* x, const float* w,
+                            const float* bias, int act, float* y, int oy0, int oy1) {
+  const int C = s.in_c, KH = s.kernel_h, KW = s.kernel_w;
+  for (int oy = oy0; oy < oy1; ++oy) {
+    const int iy0 = oy * s.stride_h - s.pad_top;
+    for (int ox = 0; ox < s.out_w; ++ox) {
+      const int ix0 = ox * s.stride_w - s.pad_left;
+      for (int c0 = 0; c0 < C; c0 += kLanes) {
+        const int cn = C - c0 < kLanes ? C - c0 : kLanes;
+        V acc = bias ? vload_n(bias + c0, cn) : vzero();
+        for (int ky = 0; ky < KH; ++ky) {
+          const int iy = iy0 + ky;
+          if (iy < 0 || iy >= s.in_h) continue;
+          for (int kx = 0; kx < KW; ++kx) {
+            const int ix = ix0 + kx;
+            if (ix < 0 || ix >= s.in_w) continue;
+            acc = vfmadd(vload_n(x + (size_t(iy) * s.in_w + ix) * C + c0, cn),
+                         vload_n(w + (ky * KW + kx) * C + c0, cn), acc);
+          }
+        }
+        if (act) acc = vact(acc, act);
+        vstore_n(y + (size_t(oy) * s.out_w + ox) * C + c0, acc, cn);
+      }
+    }
+  }
+}
+
+static void dwconv_rows(const Conv2dShape& s, const float* x, const float* w, const float* bias,
+                        int act, float* y, int oy0, int oy1) {
+  if (s.kernel_h == 3 && s.kernel_w == 3) return dwconv_rows_k<3, 3>(s, x, w, bias, act, y, oy0, oy1);
+  if (s.kernel_h == 5 && s.kernel_w == 5) return dwconv_rows_k<5, 5>(s, x, w, bias, act, y, oy0, oy1);
+  dwconv_rows_any(s, x, w, bias, act, y, oy0, oy1);
+}

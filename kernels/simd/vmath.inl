@@ -1,0 +1,50 @@
+// Vector math on top of a vec_*.h header (V, vset1, vfmadd, ...): exp, sigmoid,
+// erf, and the activations. Included inside an ISA namespace.
+//
+// exp: Cody-Waite range reduction by ln 2 and a degree-6 polynomial (Cephes
+// coefficients), about 2 ulp on [-87.3, 88]; inputs are clamped to that range
+// (below it the result is 1.2e-38 instead of a denormal or zero).
+// erf: Abramowitz & Stegun 7.1.26, absolute error <= 1.5e-7, which is below
+// GELU's float rounding at every magnitude that matters.
+
+static inline V vexp(V x) {
+  // Clamped so that 2^n stays a normal float: n in [-126, 127].
+  x = vmin(vmax(x, vset1(-87.33654f)), vset1(88.0f));
+  const V n = vround(vmul(x, vset1(1.44269504088896341f)));
+  V r = vfmadd(n, vset1(-0.693359375f), x);
+  r = vfmadd(n, vset1(2.12194440e-4f), r);
+  V p = vset1(1.9875691500e-4f);
+  p = vfmadd(p, r, vset1(1.3981999507e-3f));
+  p = vfmadd(p, r, vset1(8.3334519073e-3f));
+  p = vfmadd(p, r, vset1(4.1665795894e-2f));
+  p = vfmadd(p, r, vset1(1.6666665459e-1f));
+  p = vfmadd(p, r, vset1(5.0000001201e-1f));
+  p = vfmadd(vmul(p, r), r, vadd(r, vset1(1.0f)));
+  return vscale2(p, n);
+}
+
+static inline V vsigmoid(V x) { return vrcp(vadd(vset1(1.0f), vexp(vsub(vzero(), x)))); }
+
+static inline V verf(V x) {
+  const V a = vabs(x);
+  const V t = vrcp(vfmadd(a, vset1(0.3275911f), vset1(1.0f)));
+  V p = vset1(1.061405429f);
+  p = vfmadd(p, t, vset1(-1.453152027f));
+  p = vfmadd(p, t, vset1(1.421413741f));
+  p = vfmadd(p, t, vset1(-0.284496736f));
+  p = vfmadd(p, t, vset1(0.254829592f));
+  p = vmul(p, t);
+  const V y = vsub(vset1(1.0f), vmul(p, vexp(vsub(vzero(), vmul(a, a)))));
+  return vcopysign(y, x);
+}
+
+// act codes as kernels::Act: 0 none, 1 SiLU, 2 GELU, 3 sigmoid, 4 ReLU.
+static inline V vact(V x, int act) {
+  switch (act) {
+    case 1: return vmul(x, vsigmoid(x));
+    case 2: return vmul(vmul(x, vset1(0.5f)), vadd(vset1(1.0f), verf(vmul(x, vset1(0.70710678118654752f)))));
+    case 3: return vsigmoid(x);
+    case 4: return vmax(x, vzero());
+    default: return x;
+  }
+}

@@ -1,0 +1,43 @@
+#include "runtime/engine/kernel_select.h"
+
+#include <cstring>
+
+#include "kernels/common/cpu_features.h"
+#include "runtime/common/check.h"
+
+namespace aprt {
+
+Expected<const kernels::KernelSet*> select_kernels(const char* isa) {
+  const kernels::CpuFeatures& cpu = kernels::cpu_features();
+  struct Candidate {
+    const char* name;
+    const kernels::KernelSet* set;
+    bool runs;
+  };
+  const Candidate candidates[] = {
+      {"avx512", kernels::kernel_set_avx512(), cpu.avx512},
+      {"avx2", kernels::kernel_set_avx2(), cpu.avx2_fma},
+      {"neon", kernels::kernel_set_neon(), cpu.neon},
+  };
+  if (!isa || !*isa || std::strcmp(isa, "auto") == 0) {
+    for (const Candidate& c : candidates) {
+      if (c.set && c.runs) return c.set;
+    }
+    return static_cast<const kernels::KernelSet*>(nullptr);
+  }
+  if (std::strcmp(isa, "ref") == 0) return static_cast<const kernels::KernelSet*>(nullptr);
+  for (const Candidate& c : candidates) {
+    if (std::strcmp(isa, c.name) != 0) continue;
+    APRT_ENSURE(c.set != nullptr, Errc::kUnsupported,
+                "engine: ISA '%s' is not compiled into this build", isa);
+    APRT_ENSURE(c.runs, Errc::kUnsupported,
+                "engine: this CPU cannot run the '%s' kernels (forced by APRT_ISA or --isa)", isa);
+    return c.set;
+  }
+  return Error(Errc::kInvalidArgument, "engine: unknown ISA '%s' (auto, ref, avx512, avx2, neon)",
+               isa);
+}
+
+const char* kernel_set_name(const kernels::KernelSet* ks) { return ks ? ks->isa : "ref"; }
+
+}  // namespace aprt

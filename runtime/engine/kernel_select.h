@@ -1,0 +1,19 @@
+// Chooses the kernel table once, at load, from what the CPU reports.
+#pragma once
+
+#include "kernels/common/kernel_set.h"
+#include "runtime/common/expected.h"
+
+namespace aprt {
+
+// `isa`: null, "" or "auto" picks the best table this CPU runs; "ref" the
+// portable reference kernels (returns null); "avx512", "avx2", "neon" force
+// one, and fail with a clear message if this build lacks it or this CPU cannot
+// run it (never a SIGILL later). The APRT_ISA environment variable is read by
+// the engine when EngineOptions::isa is not set.
+Expected<const kernels::KernelSet*> select_kernels(const char* isa);
+
+// The name of what select_kernels(isa) picks ("ref" for the reference).
+const char* kernel_set_name(const kernels::KernelSet* ks);
+
+}  // namespace aprt

@@ -1,0 +1,140 @@
+#include "runtime/engine/thread_pool.h"
+
+#include <linux/futex.h>
+#include <sched.h>
+#include <sys/syscall.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <new>
+
+#include "runtime/common/check.h"
+#include "runtime/engine/denormals.h"
+
+namespace aprt {
+namespace {
+
+void cpu_relax() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#elif defined(__aarch64__)
+  asm volatile("yield");
+#endif
+}
+
+long futex(std::atomic<uint32_t>* word, int op, uint32_t value, const timespec* timeout) {
+  return syscall(SYS_futex, reinterpret_cast<uint32_t*>(word), op, value, timeout, nullptr, 0);
+}
+
+}  // namespace
+
+Expected<std::unique_ptr<ThreadPool>> ThreadPool::create(int threads, const int* cpus, int n_cpus) {
+  APRT_ENSURE(threads >= 1 && threads <= kMaxThreads, Errc::kInvalidArgument,
+              "thread pool: %d threads (1..%d)", threads, kMaxThreads);
+  std::unique_ptr<ThreadPool> pool(new (std::nothrow) ThreadPool());
+  APRT_ENSURE(pool != nullptr, Errc::kOutOfMemory, "thread pool: out of memory");
+  for (int i = 0; i < threads - 1; ++i) {
+    pool->args_[i] = WorkerArg{pool.get(), i + 1};
+    const int rc =
+        pthread_create(&pool->handles_[i], nullptr, &ThreadPool::worker_main, &pool->args_[i]);
+    if (rc != 0) {
+      pool->workers_ = i;  // the destructor joins the ones that started
+      return Error(Errc::kOutOfMemory, "thread pool: cannot start worker %d: %s", i + 1,
+                   std::strerror(rc));
+    }
+    pool->workers_ = i + 1;
+    if (cpus && i < n_cpus && cpus[i] >= 0) {
+      cpu_set_t set;
+      CPU_ZERO(&set);
+      CPU_SET(cpus[i], &set);
+      const int prc = pthread_setaffinity_np(pool->handles_[i], sizeof set, &set);
+      APRT_ENSURE(prc == 0, Errc::kInvalidArgument,
+                  "thread pool: cannot pin worker %d to CPU %d: %s", i + 1, cpus[i],
+                  std::strerror(prc));
+    }
+  }
+  return pool;
+}
+
+ThreadPool::~ThreadPool() {
+  job_.stop.store(true, std::memory_order_release);
+  job_.generation.fetch_add(1, std::memory_order_acq_rel);
+  futex(&job_.generation, FUTEX_WAKE_PRIVATE, kMaxThreads, nullptr);
+  for (int i = 0; i < workers_; ++i) pthread_join(handles_[i], nullptr);
+}
+
+void* ThreadPool::worker_main(void* arg) {
+  const DenormalsAreZero ftz;  // workers only ever run inference tasks
+  auto* a = static_cast<WorkerArg*>(arg);
+  a->pool->worker_loop(a->index);
+  return nullptr;
+}
+
+void ThreadPool::worker_loop(int index) {
+  uint32_t seen = job_.generation.load(std::memory_order_acquire);
+  for (;;) {
+    uint32_t g = job_.generation.load(std::memory_order_acquire);
+    // Wait for the next job: spin while a frame runs, otherwise sleep with a timeout.
+    for (int spins = 0; g == seen; ++spins) {
+      if (job_.spinning.load(std::memory_order_relaxed) || spins < 2000) {
+        cpu_relax();
+      } else {
+        job_.sleeping.fetch_add(1, std::memory_order_seq_cst);
+        const timespec timeout{0, 100 * 1000 * 1000};
+        futex(&job_.generation, FUTEX_WAIT_PRIVATE, seen, &timeout);
+        job_.sleeping.fetch_sub(1, std::memory_order_seq_cst);
+        spins = 0;
+      }
+      g = job_.generation.load(std::memory_order_acquire);
+    }
+    seen = g;
+    if (job_.stop.load(std::memory_order_acquire)) return;
+    const int n = job_.n_tasks;
+    TaskFn fn = job_.fn;
+    void* ctx = job_.ctx;
+    for (int t = job_.next.fetch_add(1, std::memory_order_relaxed); t < n;
+         t = job_.next.fetch_add(1, std::memory_order_relaxed)) {
+      fn(ctx, t, index);
+    }
+    job_.done.fetch_add(1, std::memory_order_acq_rel);
+  }
+}
+
+void ThreadPool::wake_sleepers() noexcept {
+  if (job_.sleeping.load(std::memory_order_seq_cst) > 0) {
+    futex(&job_.generation, FUTEX_WAKE_PRIVATE, kMaxThreads, nullptr);
+  }
+}
+
+void ThreadPool::run(int n_tasks, TaskFn fn, void* ctx) noexcept {
+  if (workers_ == 0 || n_tasks <= 1) {
+    for (int t = 0; t < n_tasks; ++t) fn(ctx, t, 0);
+    return;
+  }
+  job_.n_tasks = n_tasks;
+  job_.fn = fn;
+  job_.ctx = ctx;
+  job_.next.store(0, std::memory_order_relaxed);
+  job_.done.store(0, std::memory_order_relaxed);
+  job_.generation.fetch_add(1, std::memory_order_seq_cst);  // publishes the job
+  wake_sleepers();
+  for (int t = job_.next.fetch_add(1, std::memory_order_relaxed); t < n_tasks;
+       t = job_.next.fetch_add(1, std::memory_order_relaxed)) {
+    fn(ctx, t, 0);
+  }
+  // Every worker acknowledges the job, so none still reads it when the next starts.
+  while (job_.done.load(std::memory_order_acquire) < workers_) cpu_relax();
+}
+
+void ThreadPool::frame_begin() noexcept {
+  job_.spinning.store(true, std::memory_order_relaxed);
+  wake_sleepers();
+}
+
+void ThreadPool::frame_end() noexcept {
+  job_.spinning.store(false, std::memory_order_relaxed);
+}
+
+}  // namespace aprt

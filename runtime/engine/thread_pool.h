@@ -1,0 +1,71 @@
+// A fixed pool of worker threads for splitting one op across cores.
+//
+// Created at Engine::load() (optionally pinned); nothing is created or freed
+// afterwards. The calling thread takes part as thread 0. Between
+// run_frame_begin() and run_frame_end() the workers spin on an atomic
+// generation counter, so starting an op costs no system call; outside a frame
+// they sleep on a futex with a timeout. Tasks are claimed from an atomic
+// counter; a task's result never depends on which thread ran it, so results
+// are identical for any thread count.
+#pragma once
+
+#include <pthread.h>
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+
+#include "runtime/common/expected.h"
+
+namespace aprt {
+
+class ThreadPool {
+ public:
+  static constexpr int kMaxThreads = 16;
+  using TaskFn = void (*)(void* ctx, int task, int thread);
+
+  // `threads` in 1..kMaxThreads including the caller; `cpus` (may be null)
+  // lists a CPU per worker (cpus[i] pins worker i+1; the caller is not pinned).
+  static Expected<std::unique_ptr<ThreadPool>> create(int threads, const int* cpus, int n_cpus);
+  ~ThreadPool();
+  ThreadPool(const ThreadPool&) = delete;
+  ThreadPool& operator=(const ThreadPool&) = delete;
+
+  int threads() const { return workers_ + 1; }
+
+  // Runs fn(ctx, task, thread) for every task in [0, n_tasks) and returns when
+  // all are done. @rt: no allocation; waits only for tasks already claimed.
+  void run(int n_tasks, TaskFn fn, void* ctx) noexcept;
+
+  // Workers spin (no futex) between these two calls.
+  void frame_begin() noexcept;
+  void frame_end() noexcept;
+
+ private:
+  ThreadPool() = default;
+  static void* worker_main(void* arg);
+  void worker_loop(int index);
+  void wake_sleepers() noexcept;
+
+  struct alignas(64) Job {
+    std::atomic<uint32_t> generation{0};
+    std::atomic<int> next{0};
+    std::atomic<int> done{0};
+    std::atomic<int> sleeping{0};
+    std::atomic<bool> spinning{false};
+    std::atomic<bool> stop{false};
+    int n_tasks = 0;
+    TaskFn fn = nullptr;
+    void* ctx = nullptr;
+  };
+  Job job_;
+  int workers_ = 0;
+  pthread_t handles_[kMaxThreads] = {};
+  struct WorkerArg {
+    ThreadPool* pool;
+    int index;
+  };
+  WorkerArg args_[kMaxThreads] = {};
+};
+
+}  // namespace aprt

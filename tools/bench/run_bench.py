@@ -1,0 +1,129 @@
+#!/usr/bin/env python3
+"""aprt against ONNX Runtime on the same exported model, same thread count.
+
+One command: installs onnxruntime-node from npm if needed (--ignore-scripts:
+its postinstall wants CUDA downloads), makes the full APR-Transformer at each
+input size (random input-sensitive weights; speed does not depend on them),
+then runs ORT and aprt in interleaved rounds -- ORT, aprt, ORT, aprt, ... --
+so that both see the same machine state, and prints medians, p99 and the
+ratio ORT/aprt. --markdown FILE also writes the table.
+
+  tools/bench/run_bench.py [--sizes 224,128] [--threads 1,2] [--rounds 5] [--runs 20]
+"""
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+BENCH = os.path.join(ROOT, "tools", "bench")
+PYTHON = "/usr/bin/python3"
+
+
+def sh(cmd, **kw):
+    return subprocess.run(cmd, check=True, text=True, capture_output=True, **kw)
+
+
+def ensure_ort():
+    if os.path.isdir(os.path.join(BENCH, "node_modules", "onnxruntime-node")):
+        return
+    print("run_bench: installing onnxruntime-node from npm (--ignore-scripts)", flush=True)
+    subprocess.run(["npm", "install", "--ignore-scripts", "--no-audit", "--no-fund"], cwd=BENCH,
+                   check=True, env=dict(os.environ, ONNXRUNTIME_NODE_INSTALL="skip"))
+
+
+def ensure_model(size, out_root):
+    d = os.path.join(out_root, f"full_{size}")
+    if not os.path.exists(os.path.join(d, "model.aprt")):
+        print(f"run_bench: making the {size}x{size} model in {d}", flush=True)
+        env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "tools"), PYTHONWARNINGS="ignore")
+        sh([PYTHON, "-m", "aprt_tools", "golden", "--config", "full", "--size", str(size),
+            "--count", "2", "--convert", "--out", d], env=env)
+    return d
+
+
+def p99(xs):
+    xs = sorted(xs)
+    pos = 0.99 * (len(xs) - 1)
+    lo = int(pos)
+    hi = min(lo + 1, len(xs) - 1)
+    return xs[lo] + (xs[hi] - xs[lo]) * (pos - lo)
+
+
+def run_ort(model, threads, runs):
+    out = sh(["node", os.path.join(BENCH, "ort_bench.js"), model, str(threads), str(runs), "3"])
+    return json.loads(out.stdout.strip().splitlines()[-1])["ms"]
+
+
+def run_aprt(aprt, model, threads, runs):
+    out = sh([aprt, "bench", model, "--json", "--runs", str(runs), "--warmup", "3",
+              "--threads", str(threads)])
+    d = json.loads(out.stdout)
+    return d["ms"], d
+
+
+def cpu_name():
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown CPU"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sizes", default="224,128")
+    ap.add_argument("--threads", default="1,2")
+    ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--runs", type=int, default=20, help="timed runs per round and peer")
+    ap.add_argument("--aprt", default=os.path.join(ROOT, "build", "release", "bin", "aprt"))
+    ap.add_argument("--models", default=os.path.join(ROOT, "build", "bench"))
+    ap.add_argument("--markdown", help="also write the table to this file")
+    a = ap.parse_args()
+    if not os.path.exists(a.aprt):
+        sys.exit(f"run_bench: {a.aprt} not found: build first (tools/setup.sh)")
+    ensure_ort()
+    sizes = [int(s) for s in a.sizes.split(",")]
+    threads = [int(t) for t in a.threads.split(",")]
+    models = {s: ensure_model(s, a.models) for s in sizes}
+    ort = {(s, t): [] for s in sizes for t in threads}
+    ours = {(s, t): [] for s in sizes for t in threads}
+    info = {}
+    for r in range(a.rounds):
+        for s in sizes:
+            for t in threads:
+                ort[(s, t)] += run_ort(os.path.join(models[s], "model.onnx"), t, a.runs)
+                ms, d = run_aprt(a.aprt, os.path.join(models[s], "model.aprt"), t, a.runs)
+                ours[(s, t)] += ms
+                info[(s, t)] = d
+        print(f"run_bench: round {r + 1}/{a.rounds} done", flush=True)
+    now = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
+    head = (f"ONNX Runtime (onnxruntime-node 1.30.0, graph optimisation 'all', sequential) vs aprt, "
+            f"{a.rounds} interleaved rounds x {a.runs} runs each; {cpu_name()}, "
+            f"{os.cpu_count()} cores; {now}.")
+    lines = ["| input | threads | ORT median ms | ORT p99 | aprt median ms | aprt p99 | ORT / aprt | aprt kernels | allocations/frame |",
+             "|---|---:|---:|---:|---:|---:|---:|---|---:|"]
+    for s in sizes:
+        for t in threads:
+            om, am = statistics.median(ort[(s, t)]), statistics.median(ours[(s, t)])
+            d = info[(s, t)]
+            lines.append(f"| {s}x{s} | {t} | {om:.1f} | {p99(ort[(s, t)]):.1f} | {am:.1f} | "
+                         f"{p99(ours[(s, t)]):.1f} | **{om / am:.2f}x** | {d['isa']} | "
+                         f"{d['allocations_during_runs']} |")
+    table = head + "\n\n" + "\n".join(lines) + "\n"
+    print()
+    print(table)
+    if a.markdown:
+        with open(a.markdown, "w") as f:
+            f.write(table)
+
+
+if __name__ == "__main__":
+    main()
