@@ -14,6 +14,8 @@ PACKAGES=(
   python3 python3-numpy python3-torch python3-onnx python3-matplotlib
   # torch links libblas.so.3: OpenBLAS instead of the 10x slower reference BLAS
   libopenblas0-pthread
+  # aarch64 cross build, its tests under user-mode emulation
+  g++-aarch64-linux-gnu qemu-user
 )
 
 missing=()

@@ -4,6 +4,10 @@
 #                            the slow suites, on the ASan+UBSan build (~1 minute)
 #   tools/test.sh --slow     full-size golden models (224 and 128) on the release build
 #   tools/test.sh --fuzz N   the model-file fuzzer for N seconds (clang, libFuzzer)
+#   tools/test.sh --tsan     the threaded engine tests under ThreadSanitizer
+#   tools/test.sh --aarch64  cross build for aarch64; unit, kernel and tiny golden
+#                            tests under qemu-aarch64 as Cortex-A72 (no dotprod)
+#                            and Cortex-A76 (dotprod)
 # Run tools/setup.sh first (it installs and builds).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -31,8 +35,21 @@ case "${1:-}" in
     build/fuzz/bin/model_file_fuzz -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
       -print_final_stats=1 "$corpus"
     ;;
+  --tsan)
+    cmake --preset tsan >/dev/null
+    cmake --build --preset tsan -j "$jobs" --target unit_tests kernel_tests
+    TSAN_OPTIONS="halt_on_error=1" build/tsan/bin/unit_tests --gtest_filter='Engine.*'
+    ;;
+  --aarch64)
+    cmake --preset aarch64 >/dev/null
+    cmake --build --preset aarch64 -j "$jobs"
+    for cpu in cortex-a72 cortex-a76; do
+      echo "== aarch64 tests as $cpu"
+      QEMU_CPU=$cpu ctest --preset aarch64 -L "unit|kernels|golden" --timeout 900
+    done
+    ;;
   *)
-    echo "usage: tools/test.sh [--slow | --fuzz SECONDS]" >&2
+    echo "usage: tools/test.sh [--slow | --fuzz SECONDS | --tsan | --aarch64]" >&2
     exit 2
     ;;
 esac

@@ -9,7 +9,8 @@ void f32_conv2d_pack_weights(int co, int kh, int kw, int ci, const float* w, flo
     for (int y = 0; y < kh; ++y) {
       for (int x = 0; x < kw; ++x) {
         for (int i = 0; i < ci; ++i) {
-          out[((size_t(y) * kw + x) * ci + i) * co + o] = w[((size_t(o) * kh + y) * kw + x) * ci + i];
+          out[((size_t(y) * kw + x) * ci + i) * co + o] =
+              w[((size_t(o) * kh + y) * kw + x) * ci + i];
         }
       }
     }

@@ -23,8 +23,8 @@ struct KernelSet {
                       Act act, float* y, int oy0, int oy1);
   // Output rows [oy0, oy1) of a dense convolution; weights packed by
   // f32_conv2d_pack_weights ([KH][KW][Ci][Co]).
-  void (*conv_rows)(const Conv2dShape& s, const float* x, const float* w_packed,
-                    const float* bias, const float* residual, Act act, float* y, int oy0, int oy1);
+  void (*conv_rows)(const Conv2dShape& s, const float* x, const float* w_packed, const float* bias,
+                    const float* residual, Act act, float* y, int oy0, int oy1);
   void (*layernorm_rows)(int n, const float* x, const float* gamma, const float* beta, float eps,
                          float* y, int r0, int r1);
   void (*add)(const float* a, const float* b, float* y, size_t i0, size_t i1);

@@ -46,7 +46,7 @@ struct GemmArgs {
   size_t ldb;
   size_t b_panel_stride;
   bool b_padded;
-  const float* bias;  // [n] or null
+  const float* bias;      // [n] or null
   const float* residual;  // or null
   size_t ldr;
   float* c;

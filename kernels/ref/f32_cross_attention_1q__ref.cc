@@ -4,7 +4,9 @@
 
 namespace aprt::kernels {
 
-size_t f32_cross_attention_1q__ref_scratch(int kv_len, int e) { return 2 * size_t(e) + kv_len; }
+size_t f32_cross_attention_1q__ref_scratch(int kv_len, int e) {
+  return 2 * size_t(e) + kv_len;
+}
 
 void f32_cross_attention_1q__ref(int kv_len, int heads, int e, const float* q, const float* m,
                                  const float* pos, const float* wk, const float* wv,

@@ -208,7 +208,7 @@ static void attn_chunk(int rows, int kv_len, int d, const float* q, size_t ldq, 
 }
 
 // Query rows [q0, q0 + rows) of head h, rows <= kAttnChunk, over K and V
-// packed by attn_pack_kv. Returns false if the head width needs more than 4
+// packed by attn_pack_kv. Returns false if the head width needs more than 8
 // vectors (the caller then uses the reference kernel).
 template <int R, int SV>
 static bool attn_block(int rows, int kv_len, int d, const float* q, size_t ldq, const float* kt,
@@ -225,6 +225,10 @@ static bool attn_block(int rows, int kv_len, int d, const float* q, size_t ldq, 
     case 2: APRT_ATTN_DV(2)
     case 3: APRT_ATTN_DV(3)
     case 4: APRT_ATTN_DV(4)
+    case 5: APRT_ATTN_DV(5)
+    case 6: APRT_ATTN_DV(6)
+    case 7: APRT_ATTN_DV(7)
+    case 8: APRT_ATTN_DV(8)
     default: return false;
   }
 #undef APRT_ATTN_DV

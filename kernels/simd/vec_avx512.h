@@ -3,39 +3,76 @@
 // compiled for AVX-512 (kernels/x86/*__avx512.cc), inside that ISA's namespace,
 // so no inline function from here is ever merged with another ISA's.
 
-
 using V = __m512;
 inline constexpr int kLanes = 16;
 
-static inline V vzero() { return _mm512_setzero_ps(); }
-static inline V vset1(float x) { return _mm512_set1_ps(x); }
-static inline V vload(const float* p) { return _mm512_loadu_ps(p); }
-static inline void vstore(float* p, V v) { _mm512_storeu_ps(p, v); }
-static inline __mmask16 vmask(int n) { return static_cast<__mmask16>((1u << n) - 1u); }
+static inline V vzero() {
+  return _mm512_setzero_ps();
+}
+static inline V vset1(float x) {
+  return _mm512_set1_ps(x);
+}
+static inline V vload(const float* p) {
+  return _mm512_loadu_ps(p);
+}
+static inline void vstore(float* p, V v) {
+  _mm512_storeu_ps(p, v);
+}
+static inline __mmask16 vmask(int n) {
+  return static_cast<__mmask16>((1u << n) - 1u);
+}
 // First n lanes (0 < n <= kLanes); the rest are zero. Never reads past p + n.
-static inline V vload_n(const float* p, int n) { return _mm512_maskz_loadu_ps(vmask(n), p); }
-static inline void vstore_n(float* p, V v, int n) { _mm512_mask_storeu_ps(p, vmask(n), v); }
-static inline V vfmadd(V a, V b, V c) { return _mm512_fmadd_ps(a, b, c); }
-static inline V vadd(V a, V b) { return _mm512_add_ps(a, b); }
-static inline V vsub(V a, V b) { return _mm512_sub_ps(a, b); }
-static inline V vmul(V a, V b) { return _mm512_mul_ps(a, b); }
-static inline V vdiv(V a, V b) { return _mm512_div_ps(a, b); }
+static inline V vload_n(const float* p, int n) {
+  return _mm512_maskz_loadu_ps(vmask(n), p);
+}
+static inline void vstore_n(float* p, V v, int n) {
+  _mm512_mask_storeu_ps(p, vmask(n), v);
+}
+static inline V vfmadd(V a, V b, V c) {
+  return _mm512_fmadd_ps(a, b, c);
+}
+static inline V vadd(V a, V b) {
+  return _mm512_add_ps(a, b);
+}
+static inline V vsub(V a, V b) {
+  return _mm512_sub_ps(a, b);
+}
+static inline V vmul(V a, V b) {
+  return _mm512_mul_ps(a, b);
+}
+static inline V vdiv(V a, V b) {
+  return _mm512_div_ps(a, b);
+}
 // 1/x to ~1 ulp: 14-bit estimate and one Newton step (a division costs ~16 cycles).
 static inline V vrcp(V x) {
   const V r = _mm512_rcp14_ps(x);
   return _mm512_fmadd_ps(r, _mm512_fnmadd_ps(x, r, _mm512_set1_ps(1.0f)), r);
 }
-static inline V vmax(V a, V b) { return _mm512_max_ps(a, b); }
-static inline V vmin(V a, V b) { return _mm512_min_ps(a, b); }
-static inline V vabs(V a) { return _mm512_abs_ps(a); }
-static inline V vsqrt(V a) { return _mm512_sqrt_ps(a); }
-static inline float vreduce_add(V v) { return _mm512_reduce_add_ps(v); }
-static inline float vreduce_max(V v) { return _mm512_reduce_max_ps(v); }
+static inline V vmax(V a, V b) {
+  return _mm512_max_ps(a, b);
+}
+static inline V vmin(V a, V b) {
+  return _mm512_min_ps(a, b);
+}
+static inline V vabs(V a) {
+  return _mm512_abs_ps(a);
+}
+static inline V vsqrt(V a) {
+  return _mm512_sqrt_ps(a);
+}
+static inline float vreduce_add(V v) {
+  return _mm512_reduce_add_ps(v);
+}
+static inline float vreduce_max(V v) {
+  return _mm512_reduce_max_ps(v);
+}
 static inline V vround(V v) {
   return _mm512_roundscale_ps(v, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
 }
 // p * 2^n for integral n (vscalefps: one instruction, exact).
-static inline V vscale2(V p, V n) { return _mm512_scalef_ps(p, n); }
+static inline V vscale2(V p, V n) {
+  return _mm512_scalef_ps(p, n);
+}
 // 2^n for integral n in [-126, 127].
 static inline V vpow2i(V n) {
   const __m512i e = _mm512_add_epi32(_mm512_cvtps_epi32(n), _mm512_set1_epi32(127));

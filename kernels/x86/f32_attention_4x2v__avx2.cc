@@ -9,20 +9,20 @@
 
 namespace aprt::kernels {
 namespace avx2 {
+#include "kernels/simd/attention_impl.inl"
 #include "kernels/simd/vec_avx2.h"
 #include "kernels/simd/vmath.inl"
-#include "kernels/simd/attention_impl.inl"
 }  // namespace avx2
 
 void f32_attention_pack_kv__avx2(int kv_len, int lk_pad, int d, const float* k, size_t ldk,
-                                   const float* v, size_t ldv, int h, float* kt, float* vp) {
+                                 const float* v, size_t ldv, int h, float* kt, float* vp) {
   avx2::attn_pack_kv(kv_len, lk_pad, d, k, ldk, v, ldv, h, kt, vp);
 }
 bool f32_attention_4x2v__avx2(int rows, int kv_len, int d, const float* q, size_t ldq,
-                                    const float* kt, const float* vp, int lk_pad, float scale,
-                                    float* o, size_t ldo, int h, int q0, float* scratch) {
-  return avx2::attn_block<4, 2>(rows, kv_len, d, q, ldq, kt, vp, lk_pad, scale, o, ldo, h,
-                                        q0, scratch);
+                              const float* kt, const float* vp, int lk_pad, float scale, float* o,
+                              size_t ldo, int h, int q0, float* scratch) {
+  return avx2::attn_block<4, 2>(rows, kv_len, d, q, ldq, kt, vp, lk_pad, scale, o, ldo, h, q0,
+                                scratch);
 }
 size_t f32_attention_scratch__avx2(int d) {
   return avx2::attn_thread_scratch(4, (d + avx2::kLanes - 1) / avx2::kLanes);

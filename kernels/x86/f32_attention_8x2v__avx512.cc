@@ -9,9 +9,9 @@
 
 namespace aprt::kernels {
 namespace avx512 {
+#include "kernels/simd/attention_impl.inl"
 #include "kernels/simd/vec_avx512.h"
 #include "kernels/simd/vmath.inl"
-#include "kernels/simd/attention_impl.inl"
 }  // namespace avx512
 
 void f32_attention_pack_kv__avx512(int kv_len, int lk_pad, int d, const float* k, size_t ldk,
@@ -19,10 +19,10 @@ void f32_attention_pack_kv__avx512(int kv_len, int lk_pad, int d, const float* k
   avx512::attn_pack_kv(kv_len, lk_pad, d, k, ldk, v, ldv, h, kt, vp);
 }
 bool f32_attention_8x2v__avx512(int rows, int kv_len, int d, const float* q, size_t ldq,
-                                    const float* kt, const float* vp, int lk_pad, float scale,
-                                    float* o, size_t ldo, int h, int q0, float* scratch) {
-  return avx512::attn_block<8, 2>(rows, kv_len, d, q, ldq, kt, vp, lk_pad, scale, o, ldo, h,
-                                        q0, scratch);
+                                const float* kt, const float* vp, int lk_pad, float scale, float* o,
+                                size_t ldo, int h, int q0, float* scratch) {
+  return avx512::attn_block<8, 2>(rows, kv_len, d, q, ldq, kt, vp, lk_pad, scale, o, ldo, h, q0,
+                                  scratch);
 }
 size_t f32_attention_scratch__avx512(int d) {
   return avx512::attn_thread_scratch(8, (d + avx512::kLanes - 1) / avx512::kLanes);

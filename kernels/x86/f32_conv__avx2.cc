@@ -7,19 +7,19 @@
 
 namespace aprt::kernels {
 namespace avx2 {
+#include "kernels/simd/conv_impl.inl"
+#include "kernels/simd/dwconv_impl.inl"
 #include "kernels/simd/vec_avx2.h"
 #include "kernels/simd/vmath.inl"
-#include "kernels/simd/dwconv_impl.inl"
-#include "kernels/simd/conv_impl.inl"
 }  // namespace avx2
 
 void f32_dwconv2d__avx2(const Conv2dShape& s, const float* x, const float* w, const float* bias,
-                          Act act, float* y, int oy0, int oy1) {
+                        Act act, float* y, int oy0, int oy1) {
   avx2::dwconv_rows(s, x, w, bias, int(act), y, oy0, oy1);
 }
 
 void f32_conv2d__avx2(const Conv2dShape& s, const float* x, const float* w, const float* bias,
-                        const float* residual, Act act, float* y, int oy0, int oy1) {
+                      const float* residual, Act act, float* y, int oy0, int oy1) {
   avx2::conv_rows(s, x, w, bias, residual, int(act), y, oy0, oy1);
 }
 

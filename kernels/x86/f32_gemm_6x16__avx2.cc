@@ -7,9 +7,9 @@
 
 namespace aprt::kernels {
 namespace avx2 {
+#include "kernels/simd/gemm_impl.inl"
 #include "kernels/simd/vec_avx2.h"
 #include "kernels/simd/vmath.inl"
-#include "kernels/simd/gemm_impl.inl"
 }  // namespace avx2
 
 void f32_gemm_6x16__avx2(const GemmArgs& g, int r0, int r1, int p0, int p1) {

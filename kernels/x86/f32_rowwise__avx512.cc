@@ -7,9 +7,9 @@
 
 namespace aprt::kernels {
 namespace avx512 {
+#include "kernels/simd/rowwise_impl.inl"
 #include "kernels/simd/vec_avx512.h"
 #include "kernels/simd/vmath.inl"
-#include "kernels/simd/rowwise_impl.inl"
 }  // namespace avx512
 
 void f32_layernorm__avx512(int n, const float* x, const float* g, const float* b, float eps,

@@ -35,7 +35,7 @@ void f32_se_gate__avx2(int, int, int, const float*, const float*, const float*, 
                        const float*, float*, float*);
 void f32_se_scale__avx2(int, const float*, const float*, float*, int, int);
 void f32_attention_pack_kv__avx2(int, int, int, const float*, size_t, const float*, size_t, int,
-                                   float*, float*);
+                                 float*, float*);
 bool f32_attention_4x2v__avx2(int, int, int, const float*, size_t, const float*, const float*, int,
                               float, float*, size_t, int, int, float*);
 size_t f32_attention_scratch__avx2(int);

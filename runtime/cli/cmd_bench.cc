@@ -49,6 +49,7 @@ int cmd_bench(int argc, char** argv) {
         "  --threads N   threads for one frame, including the caller (default 1)\n"
         "  --isa NAME    kernels: auto (default), ref, avx512, avx2, neon\n"
         "  --profile     time every op; print the ops that take the most time\n"
+        "  --top N       how many of the slowest ops --profile lists (default 15)\n"
         "  --json        one JSON object on stdout instead of text\n");
     return 0;
   }
@@ -58,6 +59,7 @@ int cmd_bench(int argc, char** argv) {
   const long warmup = args.integer("--warmup", 5, 0, 1000000);
   const long seed = args.integer("--seed", 1, 0, 1L << 30);
   const long threads = args.integer("--threads", 1, 1, 16);
+  const long top = args.integer("--top", 15, 1, 100000);
   const char* isa = args.value("--isa");
   const char* path = args.positional();
   if (args.error() || !path || args.leftover()) {
@@ -149,7 +151,7 @@ int cmd_bench(int argc, char** argv) {
       }
     }
     std::printf("\nslowest ops (mean ms, GFLOP/s)\n");
-    for (size_t k = 0; k < std::min<size_t>(15, order.size()); ++k) {
+    for (size_t k = 0; k < std::min<size_t>(size_t(top), order.size()); ++k) {
       const OpNode& n = e.op(order[k]);
       const double t = double(op_total[order[k]]) / 1e6 / double(runs);
       std::printf("  %4zu %-14s %8.3f ms %7.2f  %s\n", order[k], format::op_name(n.code), t,

@@ -7,11 +7,10 @@
 
 #include <cerrno>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <new>
-
-#include <cstdlib>
 
 #include "runtime/common/check.h"
 #include "runtime/engine/denormals.h"
@@ -171,9 +170,9 @@ Expected<std::unique_ptr<Engine>> Engine::build(const uint8_t* data, size_t size
   m.image_bytes = round_up(size, kAlign);
   m.weight_bytes = 0;
   for (const Tensor& t : e->tensors_) m.weight_bytes += t.is_const() ? t.bytes : 0;
-  m.scratch_bytes = round_up(e->scratch_floats_ * sizeof(float), kAlign) +
-                    size_t(options.threads) *
-                        round_up(e->thread_scratch_floats_ * sizeof(float), kAlign);
+  m.scratch_bytes =
+      round_up(e->scratch_floats_ * sizeof(float), kAlign) +
+      size_t(options.threads) * round_up(e->thread_scratch_floats_ * sizeof(float), kAlign);
   m.total_bytes = m.image_bytes + m.packed_bytes + round_up(arena, kAlign) + m.scratch_bytes;
   if (required) *required = m.total_bytes;
   (void)plan_only;  // both passes plan; only the caller decides what to keep
@@ -336,7 +335,9 @@ Status Engine::run_profiled(uint64_t* op_nanos) noexcept {
   return ok();
 }
 
-const char* Engine::isa() const { return kernel_set_name(ks_); }
+const char* Engine::isa() const {
+  return kernel_set_name(ks_);
+}
 
 uint64_t Engine::total_flops() const {
   uint64_t f = 0;

@@ -38,6 +38,8 @@ Expected<const kernels::KernelSet*> select_kernels(const char* isa) {
                isa);
 }
 
-const char* kernel_set_name(const kernels::KernelSet* ks) { return ks ? ks->isa : "ref"; }
+const char* kernel_set_name(const kernels::KernelSet* ks) {
+  return ks ? ks->isa : "ref";
+}
 
 }  // namespace aprt

@@ -53,9 +53,9 @@ struct OpNode {
   const kernels::KernelSet* ks = nullptr;
   int threads = 1;
   // Declared by prepare():
-  size_t scratch_floats = 0;         // shared by all of the op's tasks
-  size_t thread_scratch_floats = 0;  // per thread
-  size_t packed_floats = 0;          // weights repacked at load for the kernel
+  size_t scratch_floats = 0;             // shared by all of the op's tasks
+  size_t thread_scratch_floats = 0;      // per thread
+  size_t packed_floats = 0;              // weights repacked at load for the kernel
   void (*pack)(OpNode& node) = nullptr;  // fills `packed` once memory exists
   float* packed = nullptr;
   uint64_t flops = 0;  // multiply-adds x 2, for profiles

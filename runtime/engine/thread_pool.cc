@@ -73,7 +73,9 @@ void* ThreadPool::worker_main(void* arg) {
 }
 
 void ThreadPool::worker_loop(int index) {
-  uint32_t seen = job_.generation.load(std::memory_order_acquire);
+  // Generation 0 is the pool's state at creation; a job published before this
+  // thread first ran is generation 1 and must not be mistaken for "seen".
+  uint32_t seen = 0;
   for (;;) {
     uint32_t g = job_.generation.load(std::memory_order_acquire);
     // Wait for the next job: spin while a frame runs, otherwise sleep with a timeout.

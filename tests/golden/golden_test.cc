@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 
@@ -32,10 +33,23 @@ double golden_error(const float* got, const std::vector<float>& want) {
   return worst;
 }
 
+// Loads the golden model with the kernels APRT_ISA names and APRT_THREADS
+// threads; skips when this CPU cannot run that ISA.
+Expected<std::unique_ptr<Engine>> load_golden(const std::string& dir) {
+  EngineOptions opt;
+  if (const char* t = std::getenv("APRT_THREADS")) opt.threads = std::atoi(t);
+  return Engine::load_file((dir + "/model.aprt").c_str(), opt);
+}
+
+bool isa_unsupported(const Error& e) {
+  return e.code() == Errc::kUnsupported;
+}
+
 TEST(Golden, MatchesReference) {
   const std::string dir = test::env_dir("APRT_GOLDEN_DIR");
   if (dir.empty()) GTEST_SKIP() << "APRT_GOLDEN_DIR not set";
-  auto loaded = Engine::load_file((dir + "/model.aprt").c_str());
+  auto loaded = load_golden(dir);
+  if (!loaded && isa_unsupported(loaded.error())) GTEST_SKIP() << loaded.error().message();
   ASSERT_TRUE(loaded) << loaded.error().message();
   Engine& e = *loaded.value();
   const auto& shape = e.meta().input_shape;
@@ -50,7 +64,8 @@ TEST(Golden, MatchesReference) {
     ASSERT_TRUE(e.run());
     const double err = golden_error(e.output().f32(), want);
     EXPECT_LE(err, kTolerance) << "input " << k;
-    std::printf("golden %s input %d: max relative error %.2e\n", dir.c_str(), k, err);
+    std::printf("golden %s input %d (%s kernels, %d threads): max relative error %.2e\n",
+                dir.c_str(), k, e.isa(), e.threads(), err);
     ++checked;
   }
   EXPECT_GE(checked, 1);
@@ -59,7 +74,8 @@ TEST(Golden, MatchesReference) {
 TEST(Golden, RunAllocatesNothing) {
   const std::string dir = test::env_dir("APRT_GOLDEN_DIR");
   if (dir.empty()) GTEST_SKIP() << "APRT_GOLDEN_DIR not set";
-  auto loaded = Engine::load_file((dir + "/model.aprt").c_str());
+  auto loaded = load_golden(dir);
+  if (!loaded && isa_unsupported(loaded.error())) GTEST_SKIP() << loaded.error().message();
   ASSERT_TRUE(loaded) << loaded.error().message();
   Engine& e = *loaded.value();
   (void)e.run();

@@ -8,6 +8,7 @@
 
 #include "kernels/ref/f32_attention__ref.h"
 #include "kernels/ref/f32_conv2d__ref.h"
+#include "kernels/ref/f32_cross_attention_1q__ref.h"
 #include "kernels/ref/f32_dwconv2d__ref.h"
 #include "kernels/ref/f32_elementwise__ref.h"
 #include "kernels/ref/f32_layernorm__ref.h"
@@ -242,6 +243,37 @@ TEST(RefKernels, ElementwiseAndConcat) {
   f32_concat_rows__ref(2, 2, xs, widths, out);
   const float want[10] = {1, 2, 3, 7, 8, 4, 5, 6, 9, 10};
   for (int i = 0; i < 10; ++i) EXPECT_EQ(out[i], want[i]);
+}
+
+// The single-query algebra against the plain path: project the memory to keys
+// and values, then attend.
+TEST(RefKernels, CrossAttentionOneQueryEqualsProjectThenAttend) {
+  std::mt19937 g(8);
+  for (int round = 0; round < 20; ++round) {
+    const int heads = 1 + int(g() % 4), d = 1 + int(g() % 9), l = 1 + int(g() % 50);
+    const int e = heads * d;
+    const bool with_pos = g() % 2;
+    const auto q = rnd(size_t(e), g), m = rnd(size_t(l) * e, g), pos = rnd(size_t(l) * e, g);
+    const auto wk = rnd(size_t(e) * e, g), bk = rnd(size_t(e), g), wv = rnd(size_t(e) * e, g),
+               bv = rnd(size_t(e), g);
+    std::vector<float> keys_in(m);
+    if (with_pos) {
+      for (size_t i = 0; i < keys_in.size(); ++i) keys_in[i] += pos[i];
+    }
+    std::vector<float> k(size_t(l) * e), v(size_t(l) * e), plain(static_cast<size_t>(e)),
+        fused(static_cast<size_t>(e));
+    f32_linear__ref({l, e, e}, keys_in.data(), wk.data(), bk.data(), nullptr, Act::kNone, k.data());
+    f32_linear__ref({l, e, e}, m.data(), wv.data(), bv.data(), nullptr, Act::kNone, v.data());
+    const float scale = 1.0f / std::sqrt(float(d));
+    const AttentionShape s{1, l, heads, d};
+    std::vector<float> scratch(f32_attention__ref_scratch(s));
+    f32_attention__ref(s, q.data(), k.data(), v.data(), scale, plain.data(), scratch.data());
+    std::vector<float> scratch2(f32_cross_attention_1q__ref_scratch(l, e));
+    f32_cross_attention_1q__ref(l, heads, e, q.data(), m.data(), with_pos ? pos.data() : nullptr,
+                                wk.data(), wv.data(), bv.data(), scale, fused.data(),
+                                scratch2.data());
+    for (int i = 0; i < e; ++i) EXPECT_NEAR(fused[i], plain[i], 2e-5 * (1 + std::fabs(plain[i])));
+  }
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <vector>
 
 #include "runtime/common/allocation_counter.h"
 #include "tests/support/model_builder.h"
@@ -117,6 +118,80 @@ TEST(Engine, LoadFileReportsMissingFile) {
   ASSERT_FALSE(e);
   EXPECT_EQ(e.error().code(), Errc::kIo);
   EXPECT_NE(std::strstr(e.error().message(), "cannot open"), nullptr);
+}
+
+}  // namespace
+}  // namespace aprt
+
+namespace aprt {
+namespace {
+
+// Runs the small model with `isa` and `threads`; returns the output.
+std::vector<float> run_small(const char* isa, int threads) {
+  const auto b = test::make_small_model();
+  EngineOptions opt;
+  opt.isa = isa;
+  opt.threads = threads;
+  opt.lock_memory = false;
+  auto e = Engine::load_memory(b.data(), b.size(), opt);
+  if (!e) return {};
+  fill_input(**e);
+  for (int i = 0; i < 3; ++i) (void)(*e)->run();
+  return std::vector<float>((*e)->output().f32(), (*e)->output().f32() + 7);
+}
+
+TEST(Engine, ThreadCountDoesNotChangeOneBit) {
+  const auto one = run_small("auto", 1);
+  ASSERT_EQ(one.size(), 7u);
+  for (int threads : {2, 3, 4}) {
+    const auto many = run_small("auto", threads);
+    ASSERT_EQ(many.size(), 7u);
+    EXPECT_EQ(std::memcmp(one.data(), many.data(), 7 * sizeof(float)), 0) << threads << " threads";
+  }
+}
+
+TEST(Engine, EveryIsaAgreesWithTheReference) {
+  const auto ref = run_small("ref", 1);
+  ASSERT_EQ(ref.size(), 7u);
+  for (const char* isa : {"avx2", "avx512", "neon"}) {
+    EngineOptions opt;
+    opt.isa = isa;
+    const auto b = test::make_small_model();
+    auto e = Engine::load_memory(b.data(), b.size(), opt);
+    if (!e) {
+      EXPECT_EQ(e.error().code(), Errc::kUnsupported) << e.error().message();
+      continue;  // not compiled in, or not runnable on this CPU: refused, never SIGILL
+    }
+    const auto got = run_small(isa, 2);
+    for (int i = 0; i < 7; ++i) EXPECT_NEAR(got[i], ref[i], 1e-4 * (1 + std::fabs(ref[i]))) << isa;
+  }
+}
+
+TEST(Engine, RefusesUnknownIsaAndBadThreadCounts) {
+  const auto b = test::make_small_model();
+  EngineOptions opt;
+  opt.isa = "sse9";
+  auto e = Engine::load_memory(b.data(), b.size(), opt);
+  ASSERT_FALSE(e);
+  EXPECT_NE(std::strstr(e.error().message(), "unknown ISA"), nullptr);
+  opt.isa = nullptr;
+  opt.threads = 0;
+  auto t = Engine::load_memory(b.data(), b.size(), opt);
+  ASSERT_FALSE(t);
+  EXPECT_EQ(t.error().code(), Errc::kInvalidArgument);
+}
+
+TEST(Engine, MultiThreadedRunAllocatesNothing) {
+  const auto b = test::make_small_model();
+  EngineOptions opt;
+  opt.threads = 2;
+  auto e = Engine::load_memory(b.data(), b.size(), opt);
+  ASSERT_TRUE(e) << e.error().message();
+  fill_input(**e);
+  (void)(*e)->run();
+  const AllocationScope scope;
+  for (int i = 0; i < 200; ++i) ASSERT_TRUE((*e)->run());
+  EXPECT_EQ(scope.count(), 0u);
 }
 
 }  // namespace

@@ -17,7 +17,7 @@ __attribute__((target("avx512f"))) float fma_chains_avx512(long iterations)
 #undef VADD
 #undef VSUM
 
-static inline __attribute__((target("avx2,fma"))) float sum256(__m256 v) {
+    static inline __attribute__((target("avx2,fma"))) float sum256(__m256 v) {
   float t[8];
   _mm256_storeu_ps(t, v);
   return t[0] + t[1] + t[2] + t[3] + t[4] + t[5] + t[6] + t[7];
@@ -31,6 +31,8 @@ __attribute__((target("avx2,fma"))) float fma_chains_avx2(long iterations)
 #define VSUM sum256
 #include "tools/bench/fma_peak_chains.inl"
 
-float fma_chains_neon(long) { return 0.0f; }
+    float fma_chains_neon(long) {
+  return 0.0f;
+}
 
 }  // namespace aprt::bench

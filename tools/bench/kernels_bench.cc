@@ -34,7 +34,9 @@ struct Aligned64 {
   Aligned64() = default;
   template <class U>
   Aligned64(const Aligned64<U>&) {}
-  T* allocate(size_t n) { return static_cast<T*>(std::aligned_alloc(64, (n * sizeof(T) + 63) / 64 * 64)); }
+  T* allocate(size_t n) {
+    return static_cast<T*>(std::aligned_alloc(64, (n * sizeof(T) + 63) / 64 * 64));
+  }
   void deallocate(T* p, size_t) { std::free(p); }
   bool operator==(const Aligned64&) const { return true; }
   bool operator!=(const Aligned64&) const { return false; }
@@ -53,7 +55,8 @@ Buf rnd(size_t n) {
 void add_peak_counter(benchmark::State& state, double flops_per_iter) {
   using C = benchmark::Counter;
   state.counters["GFLOP/s"] = C(flops_per_iter / 1e9, C::kIsIterationInvariantRate);
-  state.counters["peak%"] = C(flops_per_iter / 1e9 * 100.0 / g_peak_gflops, C::kIsIterationInvariantRate);
+  state.counters["peak%"] =
+      C(flops_per_iter / 1e9 * 100.0 / g_peak_gflops, C::kIsIterationInvariantRate);
   state.SetLabel(g_ks->isa);
 }
 
@@ -63,8 +66,20 @@ void BM_Gemm(benchmark::State& state) {
   const auto a = rnd(size_t(m) * k), w = rnd(size_t(n) * k), bias = rnd(n);
   Buf packed(f32_pack_b_floats(n, k, g_ks->gemm_nr)), c(size_t(m) * n);
   f32_pack_b(n, k, g_ks->gemm_nr, w.data(), packed.data());
-  const GemmArgs g{m, n, k, a.data(), size_t(k), packed.data(), size_t(g_ks->gemm_nr),
-                   size_t(k) * g_ks->gemm_nr, true, bias.data(), nullptr, 0, c.data(), size_t(n),
+  const GemmArgs g{m,
+                   n,
+                   k,
+                   a.data(),
+                   size_t(k),
+                   packed.data(),
+                   size_t(g_ks->gemm_nr),
+                   size_t(k) * g_ks->gemm_nr,
+                   true,
+                   bias.data(),
+                   nullptr,
+                   0,
+                   c.data(),
+                   size_t(n),
                    Act::kNone};
   const int panels = (n + g_ks->gemm_nr - 1) / g_ks->gemm_nr;
   for (auto _ : state) {
@@ -80,10 +95,12 @@ void BM_Attention(benchmark::State& state) {
   const int e = heads * d;
   const auto q = rnd(size_t(l) * e), k = rnd(size_t(l) * e), v = rnd(size_t(l) * e);
   const int lk_pad = (l + g_ks->attn_key_block - 1) / g_ks->attn_key_block * g_ks->attn_key_block;
-  Buf kt(size_t(e) * lk_pad), vp(size_t(e) * lk_pad), o(size_t(l) * e), scratch(g_ks->attn_scratch(d));
+  Buf kt(size_t(e) * lk_pad), vp(size_t(e) * lk_pad), o(size_t(l) * e),
+      scratch(g_ks->attn_scratch(d));
   for (auto _ : state) {
     for (int h = 0; h < heads; ++h) {
-      g_ks->attn_pack_kv(l, lk_pad, d, k.data(), size_t(e), v.data(), size_t(e), h, kt.data(), vp.data());
+      g_ks->attn_pack_kv(l, lk_pad, d, k.data(), size_t(e), v.data(), size_t(e), h, kt.data(),
+                         vp.data());
     }
     for (int h = 0; h < heads; ++h) {
       for (int q0 = 0; q0 < l; q0 += g_ks->attn_max_rows) {
@@ -128,10 +145,22 @@ void set_flush_denormals() {
 // The transformer's shapes at 224 (784 / 196 tokens) and 128 (256 / 64), and
 // the backbone's largest pointwise convolutions.
 BENCHMARK(BM_FmaPeak)->Iterations(1);
-BENCHMARK(BM_Gemm)->Args({784, 256, 256})->Args({784, 512, 256})->Args({196, 256, 256})
-    ->Args({256, 256, 256})->Args({64, 256, 256})->Args({12544, 96, 16})->Args({3136, 144, 24})
-    ->Args({784, 240, 40})->Args({196, 480, 80})->Args({1, 1024, 256});
-BENCHMARK(BM_Attention)->Args({784, 8, 32})->Args({256, 8, 32})->Args({196, 8, 32})->Args({64, 8, 32});
+BENCHMARK(BM_Gemm)
+    ->Args({784, 256, 256})
+    ->Args({784, 512, 256})
+    ->Args({196, 256, 256})
+    ->Args({256, 256, 256})
+    ->Args({64, 256, 256})
+    ->Args({12544, 96, 16})
+    ->Args({3136, 144, 24})
+    ->Args({784, 240, 40})
+    ->Args({196, 480, 80})
+    ->Args({1, 1024, 256});
+BENCHMARK(BM_Attention)
+    ->Args({784, 8, 32})
+    ->Args({256, 8, 32})
+    ->Args({196, 8, 32})
+    ->Args({64, 8, 32});
 void BM_Activation(benchmark::State& state) {
   const auto x = rnd(65536);
   Buf y(x.size());
@@ -139,11 +168,15 @@ void BM_Activation(benchmark::State& state) {
     g_ks->activation(Act(state.range(0)), x.data(), y.data(), 0, x.size());
     benchmark::DoNotOptimize(y.data());
   }
-  state.counters["Gelem/s"] = benchmark::Counter(65536.0 / 1e9, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["Gelem/s"] =
+      benchmark::Counter(65536.0 / 1e9, benchmark::Counter::kIsIterationInvariantRate);
   state.SetLabel(g_ks->isa);
 }
 BENCHMARK(BM_Activation)->Arg(1)->Arg(2)->Arg(3);
-BENCHMARK(BM_Depthwise)->Args({112, 96, 3, 2})->Args({56, 144, 5, 2})->Args({28, 240, 3, 2})
+BENCHMARK(BM_Depthwise)
+    ->Args({112, 96, 3, 2})
+    ->Args({56, 144, 5, 2})
+    ->Args({28, 240, 3, 2})
     ->Args({14, 480, 5, 1});
 
 int main(int argc, char** argv) {
@@ -153,15 +186,19 @@ int main(int argc, char** argv) {
     if (std::strncmp(argv[i], "--isa=", 6) == 0) isa = argv[i] + 6;
   }
   const auto& cpu = cpu_features();
-  if ((isa == "auto" || isa == "avx512") && cpu.avx512) g_ks = kernel_set_avx512();
-  else if ((isa == "auto" || isa == "avx2") && cpu.avx2_fma) g_ks = kernel_set_avx2();
-  else if ((isa == "auto" || isa == "neon") && cpu.neon) g_ks = kernel_set_neon();
+  if ((isa == "auto" || isa == "avx512") && cpu.avx512)
+    g_ks = kernel_set_avx512();
+  else if ((isa == "auto" || isa == "avx2") && cpu.avx2_fma)
+    g_ks = kernel_set_avx2();
+  else if ((isa == "auto" || isa == "neon") && cpu.neon)
+    g_ks = kernel_set_neon();
   if (!g_ks) {
     std::fprintf(stderr, "kernels_bench: no fast kernels for '%s' on this CPU\n", isa.c_str());
     return 2;
   }
   g_peak_gflops = aprt::bench::fma_peak_gflops(400'000'000);
-  std::printf("FMA peak of one core, measured now: %.1f GFLOP/s (%s kernels)\n", g_peak_gflops, g_ks->isa);
+  std::printf("FMA peak of one core, measured now: %.1f GFLOP/s (%s kernels)\n", g_peak_gflops,
+              g_ks->isa);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

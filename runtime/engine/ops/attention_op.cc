@@ -78,8 +78,8 @@ Status prepare_attention(OpNode& node) {
   APRT_OP_ENSURE(node, std::isfinite(scale) && scale > 0.0f, Errc::kBadOp, "scale %g invalid",
                  scale);
   APRT_OP_ENSURE(node, k->last_dim() == e && v->last_dim() == e, Errc::kShapeMismatch,
-                 "key/value width %d/%d differs from the query's %d", k->last_dim(),
-                 v->last_dim(), e);
+                 "key/value width %d/%d differs from the query's %d", k->last_dim(), v->last_dim(),
+                 e);
   APRT_OP_ENSURE(node, k->rows() == v->rows(), Errc::kShapeMismatch, "%zu keys but %zu values",
                  k->rows(), v->rows());
   APRT_OP_ENSURE(node, y->numel == q->numel && y->last_dim() == e, Errc::kShapeMismatch,
@@ -88,7 +88,7 @@ Status prepare_attention(OpNode& node) {
   s.shape = {int(q->rows()), int(k->rows()), heads, e / heads};
   s.scale = scale;
   node.flops = 4ull * q->rows() * k->rows() * e;
-  const bool fast = node.ks && (s.shape.head_dim + node.ks->lanes - 1) / node.ks->lanes <= 4;
+  const bool fast = node.ks && (s.shape.head_dim + node.ks->lanes - 1) / node.ks->lanes <= 8;
   if (fast) {
     const int step = node.ks->attn_key_block;
     s.lk_pad = (s.shape.kv_len + step - 1) / step * step;

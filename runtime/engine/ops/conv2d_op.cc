@@ -36,9 +36,8 @@ void eval_dwconv2d_ref(const OpNode& node, const RunContext&) {
 void conv_task(void* data, int task, int) {
   const auto& node = *static_cast<const OpNode*>(data);
   const auto& s = node.state_as<ConvState>();
-  node.ks->conv_rows(s.shape, node.in[0]->f32(), node.packed, node.in[2]->f32(),
-                     residual_of(node), s.act, node.out[0]->f32(), s.rows.begin(task),
-                     s.rows.end(task));
+  node.ks->conv_rows(s.shape, node.in[0]->f32(), node.packed, node.in[2]->f32(), residual_of(node),
+                     s.act, node.out[0]->f32(), s.rows.begin(task), s.rows.end(task));
 }
 
 void dwconv_task(void* data, int task, int) {
@@ -53,8 +52,7 @@ void eval_conv2d_fast(const OpNode& node, const RunContext& ctx) {
 }
 
 void eval_dwconv2d_fast(const OpNode& node, const RunContext& ctx) {
-  parallel_for(ctx, node.state_as<ConvState>().rows.tasks, dwconv_task,
-               const_cast<OpNode*>(&node));
+  parallel_for(ctx, node.state_as<ConvState>().rows.tasks, dwconv_task, const_cast<OpNode*>(&node));
 }
 
 void pack_conv2d(OpNode& node) {
@@ -99,11 +97,9 @@ Status prepare(OpNode& node, bool depthwise) {
   }
   const int bd[1] = {co};
   if (!(st = expect_dims(node, b, "bias", 1, bd))) return st;
-  APRT_OP_ENSURE(node,
-                 pt >= 0 && pl >= 0 && pb >= 0 && pr >= 0 && pt < kh && pb < kh && pl < kw &&
-                     pr < kw,
-                 Errc::kBadOp, "padding (t%d l%d b%d r%d) invalid for a %dx%d kernel", pt, pl, pb,
-                 pr, kh, kw);
+  APRT_OP_ENSURE(
+      node, pt >= 0 && pl >= 0 && pb >= 0 && pr >= 0 && pt < kh && pb < kh && pl < kw && pr < kw,
+      Errc::kBadOp, "padding (t%d l%d b%d r%d) invalid for a %dx%d kernel", pt, pl, pb, pr, kh, kw);
   const int ph = x->dims[1] + pt + pb, pw = x->dims[2] + pl + pr;
   APRT_OP_ENSURE(node, ph >= kh && pw >= kw, Errc::kShapeMismatch,
                  "padded input %dx%d is smaller than the %dx%d kernel", ph, pw, kh, kw);
@@ -142,7 +138,11 @@ Status prepare(OpNode& node, bool depthwise) {
 
 }  // namespace
 
-Status prepare_conv2d(OpNode& node) { return prepare(node, false); }
-Status prepare_dwconv2d(OpNode& node) { return prepare(node, true); }
+Status prepare_conv2d(OpNode& node) {
+  return prepare(node, false);
+}
+Status prepare_dwconv2d(OpNode& node) {
+  return prepare(node, true);
+}
 
 }  // namespace aprt::ops

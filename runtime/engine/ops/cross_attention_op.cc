@@ -17,21 +17,23 @@ namespace {
 struct CrossState {
   int kv_len, heads, e;
   float scale;
-  // Scratch layout (floats): qs [E] | qt [H][E] | qtT [E][H] | X [L][E] | sT [L][H] | s [H][L] | z [H][E]
+  // Scratch layout (floats): qs [E] | qt [H][E] | qtT [E][H] | X [L][E] | sT [L][H] | s [H][L] | z
+  // [H][E]
   size_t off_qt, off_qtt, off_x, off_st, off_s, off_z;
-  Split x_split;  // elements of X = M + P
+  Split x_split;           // elements of X = M + P
   Split s_rows, s_panels;  // scores^T GEMM
   Split z_rows, z_panels;  // Z GEMM
 };
 
-const float* pos_of(const OpNode& node) { return node.in[2] ? node.in[2]->f32() : nullptr; }
+const float* pos_of(const OpNode& node) {
+  return node.in[2] ? node.in[2]->f32() : nullptr;
+}
 
 void eval_cross_ref(const OpNode& node, const RunContext& ctx) {
   const auto& s = node.state_as<CrossState>();
-  kernels::f32_cross_attention_1q__ref(s.kv_len, s.heads, s.e, node.in[0]->f32(),
-                                       node.in[1]->f32(), pos_of(node), node.in[3]->f32(),
-                                       node.in[5]->f32(), node.in[6]->f32(), s.scale,
-                                       node.out[0]->f32(), ctx.scratch);
+  kernels::f32_cross_attention_1q__ref(s.kv_len, s.heads, s.e, node.in[0]->f32(), node.in[1]->f32(),
+                                       pos_of(node), node.in[3]->f32(), node.in[5]->f32(),
+                                       node.in[6]->f32(), s.scale, node.out[0]->f32(), ctx.scratch);
 }
 
 struct CrossTask {
@@ -72,9 +74,21 @@ void eval_cross_fast(const OpNode& node, const RunContext& ctx) {
   for (int c = 0; c < e; ++c) qs[c] = q[c] * s.scale;
   // qt_h = (scale q_h) W_k,h: A = [1][d], B = rows h*d.. of Wk as a row-major [d][E].
   for (int h = 0; h < h_count; ++h) {
-    const kernels::GemmArgs g{1, e, d, qs + h * d, size_t(d), node.in[3]->f32() + size_t(h) * d * e,
-                              size_t(e), nr, false, nullptr, nullptr, 0, qt + size_t(h) * e,
-                              size_t(e), kernels::Act::kNone};
+    const kernels::GemmArgs g{1,
+                              e,
+                              d,
+                              qs + h * d,
+                              size_t(d),
+                              node.in[3]->f32() + size_t(h) * d * e,
+                              size_t(e),
+                              nr,
+                              false,
+                              nullptr,
+                              nullptr,
+                              0,
+                              qt + size_t(h) * e,
+                              size_t(e),
+                              kernels::Act::kNone};
     ks.gemm(g, 0, 1, 0, int((size_t(e) + nr - 1) / nr));
   }
   for (int h = 0; h < h_count; ++h) {
@@ -112,8 +126,20 @@ void eval_cross_fast(const OpNode& node, const RunContext& ctx) {
   float* o = node.out[0]->f32();
   const int panels_per_head = d / ks.gemm_nr;
   for (int h = 0; h < h_count; ++h) {
-    const kernels::GemmArgs g{1,  e, e, z + size_t(h) * e, size_t(e), node.packed, nr,
-                              size_t(e) * nr, true, node.in[6]->f32(), nullptr, 0, o, size_t(e),
+    const kernels::GemmArgs g{1,
+                              e,
+                              e,
+                              z + size_t(h) * e,
+                              size_t(e),
+                              node.packed,
+                              nr,
+                              size_t(e) * nr,
+                              true,
+                              node.in[6]->f32(),
+                              nullptr,
+                              0,
+                              o,
+                              size_t(e),
                               kernels::Act::kNone};
     ks.gemm(g, 0, 1, h * panels_per_head, (h + 1) * panels_per_head);
   }

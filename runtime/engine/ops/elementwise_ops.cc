@@ -22,15 +22,15 @@ void eval_add_ref(const OpNode& node, const RunContext&) {
 }
 
 void eval_activation_ref(const OpNode& node, const RunContext&) {
-  kernels::f32_activation__ref(node.out[0]->numel, node.state_as<EltState>().act,
-                               node.in[0]->f32(), node.out[0]->f32());
+  kernels::f32_activation__ref(node.out[0]->numel, node.state_as<EltState>().act, node.in[0]->f32(),
+                               node.out[0]->f32());
 }
 
 void add_task(void* data, int task, int) {
   const auto& node = *static_cast<const OpNode*>(data);
   const auto& s = node.state_as<EltState>();
-  node.ks->add(node.in[0]->f32(), node.in[1]->f32(), node.out[0]->f32(), size_t(s.split.begin(task)),
-               size_t(s.split.end(task)));
+  node.ks->add(node.in[0]->f32(), node.in[1]->f32(), node.out[0]->f32(),
+               size_t(s.split.begin(task)), size_t(s.split.end(task)));
 }
 
 void activation_task(void* data, int task, int) {
@@ -68,8 +68,8 @@ Status prepare_add(OpNode& node) {
   Status st;
   APRT_OP_ENSURE(node, node.n_in == 2, Errc::kBadOp, "needs 2 inputs, has %d", node.n_in);
   if (!(st = expect_f32(node, node.in[0], "first operand", false))) return st;
-  APRT_OP_ENSURE(node, node.in[1] && node.in[1]->dtype == format::DType::kF32,
-                 Errc::kShapeMismatch, "second operand must be f32");
+  APRT_OP_ENSURE(node, node.in[1] && node.in[1]->dtype == format::DType::kF32, Errc::kShapeMismatch,
+                 "second operand must be f32");
   if (!(st = expect_f32(node, node.out[0], "output", false))) return st;
   APRT_OP_ENSURE(node,
                  node.in[0]->numel == node.in[1]->numel && node.out[0]->numel == node.in[0]->numel,

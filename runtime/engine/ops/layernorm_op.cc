@@ -14,8 +14,8 @@ struct LnState {
 
 void eval_layernorm_ref(const OpNode& node, const RunContext&) {
   const auto& s = node.state_as<LnState>();
-  kernels::f32_layernorm__ref(s.rows, s.n, node.in[0]->f32(), node.in[1]->f32(),
-                              node.in[2]->f32(), s.eps, node.out[0]->f32());
+  kernels::f32_layernorm__ref(s.rows, s.n, node.in[0]->f32(), node.in[1]->f32(), node.in[2]->f32(),
+                              s.eps, node.out[0]->f32());
 }
 
 void ln_task(void* data, int task, int) {

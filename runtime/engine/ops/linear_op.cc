@@ -80,8 +80,7 @@ Status prepare_linear(OpNode& node) {
   if (!(st = expect_f32(node, b, "bias", true))) return st;
   if (!(st = expect_f32(node, y, "output", false))) return st;
   if (!(st = expect_act(node, node.params[0]))) return st;
-  APRT_OP_ENSURE(node, w->rank == 2, Errc::kShapeMismatch, "weights '%s' must be [N, K]",
-                 w->name);
+  APRT_OP_ENSURE(node, w->rank == 2, Errc::kShapeMismatch, "weights '%s' must be [N, K]", w->name);
   const int n = w->dims[0], k = w->dims[1];
   const int bd[1] = {n};
   if (!(st = expect_dims(node, b, "bias", 1, bd))) return st;

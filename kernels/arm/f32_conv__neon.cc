@@ -1,0 +1,26 @@
+// f32 depthwise and dense NHWC convolutions, neon. See simd/dwconv_impl.inl, conv_impl.inl.
+#include <arm_neon.h>
+
+#include <cstdint>
+
+#include "kernels/common/kernel_types.h"
+
+namespace aprt::kernels {
+namespace neon {
+#include "kernels/simd/conv_impl.inl"
+#include "kernels/simd/dwconv_impl.inl"
+#include "kernels/simd/vec_neon.h"
+#include "kernels/simd/vmath.inl"
+}  // namespace neon
+
+void f32_dwconv2d__neon(const Conv2dShape& s, const float* x, const float* w, const float* bias,
+                        Act act, float* y, int oy0, int oy1) {
+  neon::dwconv_rows(s, x, w, bias, int(act), y, oy0, oy1);
+}
+
+void f32_conv2d__neon(const Conv2dShape& s, const float* x, const float* w, const float* bias,
+                      const float* residual, Act act, float* y, int oy0, int oy1) {
+  neon::conv_rows(s, x, w, bias, residual, int(act), y, oy0, oy1);
+}
+
+}  // namespace aprt::kernels
