@@ -9,9 +9,12 @@
 
 namespace aprt::kernels {
 namespace neon {
-#include "kernels/simd/attention_impl.inl"
+// Order matters: the vector header, then vmath, then the kernels.
+// clang-format off
 #include "kernels/simd/vec_neon.h"
 #include "kernels/simd/vmath.inl"
+#include "kernels/simd/attention_impl.inl"
+// clang-format on
 }  // namespace neon
 
 void f32_attention_pack_kv__neon(int kv_len, int lk_pad, int d, const float* k, size_t ldk,

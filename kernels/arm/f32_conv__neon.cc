@@ -7,10 +7,13 @@
 
 namespace aprt::kernels {
 namespace neon {
-#include "kernels/simd/conv_impl.inl"
-#include "kernels/simd/dwconv_impl.inl"
+// Order matters: the vector header, then vmath, then the kernels.
+// clang-format off
 #include "kernels/simd/vec_neon.h"
 #include "kernels/simd/vmath.inl"
+#include "kernels/simd/conv_impl.inl"
+#include "kernels/simd/dwconv_impl.inl"
+// clang-format on
 }  // namespace neon
 
 void f32_dwconv2d__neon(const Conv2dShape& s, const float* x, const float* w, const float* bias,

@@ -7,9 +7,12 @@
 
 namespace aprt::kernels {
 namespace neon {
-#include "kernels/simd/rowwise_impl.inl"
+// Order matters: the vector header, then vmath, then the kernels.
+// clang-format off
 #include "kernels/simd/vec_neon.h"
 #include "kernels/simd/vmath.inl"
+#include "kernels/simd/rowwise_impl.inl"
+// clang-format on
 }  // namespace neon
 
 void f32_layernorm__neon(int n, const float* x, const float* g, const float* b, float eps, float* y,

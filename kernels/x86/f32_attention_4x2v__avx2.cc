@@ -9,9 +9,12 @@
 
 namespace aprt::kernels {
 namespace avx2 {
-#include "kernels/simd/attention_impl.inl"
+// Order matters: the vector header, then vmath, then the kernels.
+// clang-format off
 #include "kernels/simd/vec_avx2.h"
 #include "kernels/simd/vmath.inl"
+#include "kernels/simd/attention_impl.inl"
+// clang-format on
 }  // namespace avx2
 
 void f32_attention_pack_kv__avx2(int kv_len, int lk_pad, int d, const float* k, size_t ldk,

@@ -7,10 +7,13 @@
 
 namespace aprt::kernels {
 namespace avx2 {
-#include "kernels/simd/conv_impl.inl"
-#include "kernels/simd/dwconv_impl.inl"
+// Order matters: the vector header, then vmath, then the kernels.
+// clang-format off
 #include "kernels/simd/vec_avx2.h"
 #include "kernels/simd/vmath.inl"
+#include "kernels/simd/conv_impl.inl"
+#include "kernels/simd/dwconv_impl.inl"
+// clang-format on
 }  // namespace avx2
 
 void f32_dwconv2d__avx2(const Conv2dShape& s, const float* x, const float* w, const float* bias,

@@ -7,9 +7,12 @@
 
 namespace aprt::kernels {
 namespace avx2 {
-#include "kernels/simd/gemm_impl.inl"
+// Order matters: the vector header, then vmath, then the kernels.
+// clang-format off
 #include "kernels/simd/vec_avx2.h"
 #include "kernels/simd/vmath.inl"
+#include "kernels/simd/gemm_impl.inl"
+// clang-format on
 }  // namespace avx2
 
 void f32_gemm_6x16__avx2(const GemmArgs& g, int r0, int r1, int p0, int p1) {

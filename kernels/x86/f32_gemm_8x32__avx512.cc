@@ -7,9 +7,12 @@
 
 namespace aprt::kernels {
 namespace avx512 {
-#include "kernels/simd/gemm_impl.inl"
+// Order matters: the vector header, then vmath, then the kernels.
+// clang-format off
 #include "kernels/simd/vec_avx512.h"
 #include "kernels/simd/vmath.inl"
+#include "kernels/simd/gemm_impl.inl"
+// clang-format on
 }  // namespace avx512
 
 void f32_gemm_8x32__avx512(const GemmArgs& g, int r0, int r1, int p0, int p1) {

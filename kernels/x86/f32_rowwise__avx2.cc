@@ -7,9 +7,12 @@
 
 namespace aprt::kernels {
 namespace avx2 {
-#include "kernels/simd/rowwise_impl.inl"
+// Order matters: the vector header, then vmath, then the kernels.
+// clang-format off
 #include "kernels/simd/vec_avx2.h"
 #include "kernels/simd/vmath.inl"
+#include "kernels/simd/rowwise_impl.inl"
+// clang-format on
 }  // namespace avx2
 
 void f32_layernorm__avx2(int n, const float* x, const float* g, const float* b, float eps, float* y,

@@ -7,9 +7,12 @@
 
 namespace aprt::kernels {
 namespace avx512 {
-#include "kernels/simd/rowwise_impl.inl"
+// Order matters: the vector header, then vmath, then the kernels.
+// clang-format off
 #include "kernels/simd/vec_avx512.h"
 #include "kernels/simd/vmath.inl"
+#include "kernels/simd/rowwise_impl.inl"
+// clang-format on
 }  // namespace avx512
 
 void f32_layernorm__avx512(int n, const float* x, const float* g, const float* b, float eps,
