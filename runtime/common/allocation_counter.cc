@@ -143,3 +143,23 @@ void operator delete(void* p, size_t, std::align_val_t) noexcept {
 void operator delete[](void* p, size_t, std::align_val_t) noexcept {
   APRT_RAW_FREE(p);
 }
+void* operator new(size_t n, std::align_val_t a, const std::nothrow_t&) noexcept {
+  count();
+  return APRT_RAW_ALIGNED(static_cast<size_t>(a), n ? n : 1);
+}
+void* operator new[](size_t n, std::align_val_t a, const std::nothrow_t&) noexcept {
+  count();
+  return APRT_RAW_ALIGNED(static_cast<size_t>(a), n ? n : 1);
+}
+void operator delete(void* p, const std::nothrow_t&) noexcept {
+  APRT_RAW_FREE(p);
+}
+void operator delete[](void* p, const std::nothrow_t&) noexcept {
+  APRT_RAW_FREE(p);
+}
+void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept {
+  APRT_RAW_FREE(p);
+}
+void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept {
+  APRT_RAW_FREE(p);
+}

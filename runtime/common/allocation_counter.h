@@ -1,9 +1,10 @@
 // Counts heap allocations, so tests and `aprt bench` can prove that a stretch
 // of code allocates nothing.
 //
-// Linking allocation_counter.cc replaces the global operator new/delete (all
-// forms) and, in builds without AddressSanitizer, interposes malloc, calloc,
-// realloc, aligned_alloc, posix_memalign and memalign as well (ASan owns those
+// Linking allocation_counter.cc replaces the global operator new/delete in
+// every form (so that each allocation and its release meet one allocator)
+// and, in builds without a sanitizer, interposes malloc, calloc, realloc,
+// aligned_alloc, posix_memalign and memalign as well (the sanitizers own those
 // symbols; there only C++ allocations are counted). Counting is one relaxed
 // atomic increment per allocation.
 #pragma once

@@ -1,0 +1,337 @@
+// aprt_synth: renders a drive through the procedural town.
+//
+//   aprt_synth --out DIR [--split train|test] [--town-seed N] [--route-seed N]
+//              [--frames N] [--width 256 --height 192 --hfov 90]
+//              [--lighting day|dusk|overcast] [--lidar] [--beams 32] [--threads N]
+//
+// Writes the DeepLoc layout: DIR/poses.txt ("name x y z qw qx qy qz", the
+// camera's pose in the map frame), DIR/images/NNNNNN.png, with --lidar
+// DIR/lidar/NNNNNN.bin (KITTI: x y z intensity float32, sensor frame) and
+// DIR/lidar_poses.txt, and DIR/dataset.json (intrinsics, mounting, lighting,
+// seeds). Deterministic for given arguments.
+#include <png.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tools/synth/drive.h"
+#include "tools/synth/raycast.h"
+#include "tools/synth/town.h"
+
+namespace aprt::synth {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct Options {
+  std::string out;
+  std::string split = "train";
+  std::string lighting = "day";
+  uint32_t town_seed = 1;
+  uint32_t route_seed = 1;
+  int frames = 0;  // 0: the whole route
+  int width = 256, height = 192;
+  double hfov_deg = 90.0;
+  double spacing = 1.0;
+  double max_length = 1e9;
+  bool lidar = false;
+  int beams = 32;
+  int azimuths = 1024;
+  double lidar_range = 80.0;
+  int threads = 2;
+  // Mounting on base_link (x forward, y left, z up), metres and degrees.
+  double cam_x = 1.2, cam_y = 0.0, cam_z = 1.55, cam_pitch_deg = 3.0;
+  double lidar_x = 0.0, lidar_y = 0.0, lidar_z = 1.9;
+};
+
+struct Quat {
+  double w, x, y, z;
+};
+
+// Rotation R = Rz(yaw) * Ry(pitch) (pitch > 0 tilts the x axis down) as a quaternion.
+Quat yaw_pitch(double yaw, double pitch) {
+  const double cz = std::cos(yaw / 2), sz = std::sin(yaw / 2);
+  const double cy = std::cos(pitch / 2), sy = std::sin(pitch / 2);
+  return {cz * cy, -sz * sy, cz * sy, sz * cy};  // (0,0,sz,cz) * (0,sy,0,cy)
+}
+
+// Rotate v by quaternion q.
+Vec3 rotate(Quat q, Vec3 v) {
+  const double w = q.w, x = q.x, y = q.y, z = q.z;
+  const double r00 = 1 - 2 * (y * y + z * z), r01 = 2 * (x * y - w * z), r02 = 2 * (x * z + w * y);
+  const double r10 = 2 * (x * y + w * z), r11 = 1 - 2 * (x * x + z * z), r12 = 2 * (y * z - w * x);
+  const double r20 = 2 * (x * z - w * y), r21 = 2 * (y * z + w * x), r22 = 1 - 2 * (x * x + y * y);
+  return {r00 * v.x + r01 * v.y + r02 * v.z, r10 * v.x + r11 * v.y + r12 * v.z,
+          r20 * v.x + r21 * v.y + r22 * v.z};
+}
+
+Lighting lighting_preset(const std::string& name) {
+  Lighting L;
+  auto sun_from = [](double az_deg, double el_deg) {
+    const double az = az_deg * kPi / 180, el = el_deg * kPi / 180;
+    return Vec3{std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
+  };
+  if (name == "dusk") {
+    L.sun_dir = sun_from(250, 14);
+    L.sun = {1.0f, 0.62f, 0.35f};
+    L.ambient = {0.22f, 0.2f, 0.28f};
+    L.sky_horizon = {0.95f, 0.6f, 0.4f};
+    L.sky_zenith = {0.25f, 0.3f, 0.55f};
+    L.fog = {0.7f, 0.55f, 0.5f};
+    L.fog_distance = 220.0;
+  } else if (name == "overcast") {
+    L.sun_dir = sun_from(200, 60);
+    L.sun = {0.25f, 0.25f, 0.27f};
+    L.ambient = {0.62f, 0.63f, 0.66f};
+    L.sky_horizon = {0.78f, 0.79f, 0.8f};
+    L.sky_zenith = {0.6f, 0.62f, 0.66f};
+    L.fog = {0.72f, 0.73f, 0.75f};
+    L.fog_distance = 140.0;
+  } else {
+    L.sun_dir = sun_from(135, 50);
+  }
+  return L;
+}
+
+bool write_png(const std::string& path, int w, int h, const std::vector<uint8_t>& rgb) {
+  FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) return false;
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png_create_info_struct(png);
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    std::fclose(f);
+    return false;
+  }
+  png_init_io(png, f);
+  png_set_IHDR(png, info, w, h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  for (int y = 0; y < h; ++y) {
+    png_write_row(png, const_cast<png_bytep>(rgb.data() + size_t(y) * w * 3));
+  }
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  return std::fclose(f) == 0;
+}
+
+uint8_t to_srgb(float v, double exposure) {
+  const double x = std::clamp(v * exposure, 0.0, 1.0);
+  return uint8_t(std::lround(255.0 * std::pow(x, 1.0 / 2.2)));
+}
+
+void render_image(const Scene& scene, const Options& o, const Lighting& L, Vec3 eye, Quat q,
+                  std::vector<uint8_t>* rgb) {
+  const double f = (o.width / 2.0) / std::tan(o.hfov_deg * kPi / 360.0);
+  const double cx = o.width / 2.0 - 0.5, cy = o.height / 2.0 - 0.5;
+  rgb->resize(size_t(o.width) * o.height * 3);
+  for (int v = 0; v < o.height; ++v) {
+    for (int u = 0; u < o.width; ++u) {
+      Vec3 d{f, -(u - cx), -(v - cy)};  // camera body: x forward, y left, z up
+      d = d * (1.0 / std::sqrt(dot(d, d)));
+      const Color c = scene.shade(eye, rotate(q, d), L);
+      uint8_t* p = rgb->data() + (size_t(v) * o.width + u) * 3;
+      p[0] = to_srgb(c.r, L.exposure);
+      p[1] = to_srgb(c.g, L.exposure);
+      p[2] = to_srgb(c.b, L.exposure);
+    }
+  }
+}
+
+bool write_scan(const Scene& scene, const Options& o, Vec3 origin, double yaw, uint32_t seed,
+                const std::string& path) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::vector<float> pts;
+  pts.reserve(size_t(o.beams) * o.azimuths * 4);
+  const Quat q = yaw_pitch(yaw, 0.0);
+  for (int b = 0; b < o.beams; ++b) {
+    const double el = (-25.0 + 40.0 * b / std::max(1, o.beams - 1)) * kPi / 180;
+    for (int a = 0; a < o.azimuths; ++a) {
+      const double az = 2 * kPi * a / o.azimuths;
+      const Vec3 local{std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
+      Hit h;
+      if (!scene.intersect(origin, rotate(q, local), o.lidar_range, &h) || h.t < 1.0) continue;
+      const double r = h.t + noise(rng);
+      const float lum = 0.3f * h.albedo.r + 0.6f * h.albedo.g + 0.1f * h.albedo.b;
+      pts.insert(pts.end(), {float(local.x * r), float(local.y * r), float(local.z * r), lum});
+    }
+  }
+  FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) return false;
+  const bool ok = std::fwrite(pts.data(), sizeof(float), pts.size(), f) == pts.size();
+  return std::fclose(f) == 0 && ok;
+}
+
+// mkdir -p
+bool make_dirs(const std::string& path) {
+  for (size_t pos = 1; pos <= path.size(); ++pos) {
+    if (pos != path.size() && path[pos] != '/') continue;
+    const std::string part = path.substr(0, pos);
+    if (mkdir(part.c_str(), 0755) != 0 && errno != EEXIST) return false;
+  }
+  return true;
+}
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: aprt_synth --out DIR [--split train|test] [--town-seed N] [--route-seed N]\n"
+               "                  [--frames N] [--max-length M] [--spacing M] [--width W] "
+               "[--height H] [--hfov DEG]\n"
+               "                  [--lighting day|dusk|overcast] [--lidar] [--beams N] "
+               "[--threads N]\n");
+  return 2;
+}
+
+int run(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
+    const char* v = nullptr;
+    if (a == "--lidar") {
+      o.lidar = true;
+      continue;
+    }
+    if (!(v = next())) return usage();
+    if (a == "--out")
+      o.out = v;
+    else if (a == "--split")
+      o.split = v;
+    else if (a == "--lighting")
+      o.lighting = v;
+    else if (a == "--town-seed")
+      o.town_seed = uint32_t(std::atoi(v));
+    else if (a == "--route-seed")
+      o.route_seed = uint32_t(std::atoi(v));
+    else if (a == "--frames")
+      o.frames = std::atoi(v);
+    else if (a == "--max-length")
+      o.max_length = std::atof(v);
+    else if (a == "--spacing")
+      o.spacing = std::atof(v);
+    else if (a == "--width")
+      o.width = std::atoi(v);
+    else if (a == "--height")
+      o.height = std::atoi(v);
+    else if (a == "--hfov")
+      o.hfov_deg = std::atof(v);
+    else if (a == "--beams")
+      o.beams = std::atoi(v);
+    else if (a == "--threads")
+      o.threads = std::max(1, std::atoi(v));
+    else
+      return usage();
+  }
+  if (o.out.empty() || o.width < 8 || o.height < 8 || o.spacing <= 0) return usage();
+  const Town town = make_town(o.town_seed);
+  const Scene scene(town);
+  RouteOptions ro;
+  ro.seed = o.route_seed;
+  ro.cover_all = o.split == "train";
+  ro.max_length = o.max_length;
+  ro.spacing = o.spacing;
+  ro.lane_jitter = o.split == "train" ? 0.5 : 0.7;
+  std::vector<VehiclePose> path = drive(town, ro);
+  if (o.frames > 0 && size_t(o.frames) < path.size()) path.resize(size_t(o.frames));
+  for (const std::string& dir : {o.out, o.out + "/images", o.out + "/lidar"}) {
+    if (!o.lidar && dir == o.out + "/lidar") continue;
+    if (!make_dirs(dir)) {
+      std::fprintf(stderr, "aprt_synth: cannot create %s: %s\n", dir.c_str(), std::strerror(errno));
+      return 1;
+    }
+  }
+  const Lighting L = lighting_preset(o.lighting);
+  const double pitch = o.cam_pitch_deg * kPi / 180;
+  std::vector<std::string> lines(path.size()), lidar_lines(path.size());
+  std::vector<int> failed(size_t(o.threads), 0);
+  auto worker = [&](int t) {
+    std::vector<uint8_t> rgb;
+    char name[64];
+    for (size_t k = size_t(t); k < path.size(); k += size_t(o.threads)) {
+      const VehiclePose& vp = path[k];
+      const Quat qv = yaw_pitch(vp.yaw, 0.0);
+      const Vec3 base{vp.x, vp.y, 0.0};
+      const Vec3 eye = base + rotate(qv, {o.cam_x, o.cam_y, o.cam_z});
+      const Quat qc = yaw_pitch(vp.yaw, pitch);
+      render_image(scene, o, L, eye, qc, &rgb);
+      std::snprintf(name, sizeof name, "images/%06zu.png", k);
+      if (!write_png(o.out + "/" + name, o.width, o.height, rgb)) failed[size_t(t)]++;
+      char line[256];
+      std::snprintf(line, sizeof line, "%s %.4f %.4f %.4f %.6f %.6f %.6f %.6f", name, eye.x, eye.y,
+                    eye.z, qc.w, qc.x, qc.y, qc.z);
+      lines[k] = line;
+      if (o.lidar) {
+        const Vec3 origin = base + rotate(qv, {o.lidar_x, o.lidar_y, o.lidar_z});
+        std::snprintf(name, sizeof name, "lidar/%06zu.bin", k);
+        if (!write_scan(scene, o, origin, vp.yaw, o.route_seed * 100003u + uint32_t(k),
+                        o.out + "/" + name)) {
+          failed[size_t(t)]++;
+        }
+        std::snprintf(line, sizeof line, "%s %.4f %.4f %.4f %.6f %.6f %.6f %.6f", name, origin.x,
+                      origin.y, origin.z, qv.w, qv.x, qv.y, qv.z);
+        lidar_lines[k] = line;
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 0; t < o.threads; ++t) threads.emplace_back(worker, t);
+  for (auto& th : threads) th.join();
+  for (int f : failed) {
+    if (f) {
+      std::fprintf(stderr, "aprt_synth: %d files could not be written under %s\n", f,
+                   o.out.c_str());
+      return 1;
+    }
+  }
+  FILE* p = std::fopen((o.out + "/poses.txt").c_str(), "w");
+  if (!p) return 1;
+  std::fprintf(p,
+               "# name x y z qw qx qy qz (camera pose in the map frame: x east, y north, z up;\n"
+               "# camera body axes x forward, y left, z up)\n");
+  for (const auto& l : lines) std::fprintf(p, "%s\n", l.c_str());
+  std::fclose(p);
+  if (o.lidar) {
+    FILE* lp = std::fopen((o.out + "/lidar_poses.txt").c_str(), "w");
+    if (!lp) return 1;
+    std::fprintf(lp, "# name x y z qw qx qy qz (LiDAR pose in the map frame)\n");
+    for (const auto& l : lidar_lines) std::fprintf(lp, "%s\n", l.c_str());
+    std::fclose(lp);
+  }
+  FILE* j = std::fopen((o.out + "/dataset.json").c_str(), "w");
+  if (!j) return 1;
+  const double f = (o.width / 2.0) / std::tan(o.hfov_deg * kPi / 360.0);
+  std::fprintf(
+      j,
+      "{\"generator\": \"aprt_synth\", \"split\": \"%s\", \"lighting\": \"%s\", "
+      "\"town_seed\": %u, \"route_seed\": %u, \"frames\": %zu,\n"
+      " \"camera\": {\"width\": %d, \"height\": %d, \"fx\": %.4f, \"fy\": %.4f, "
+      "\"cx\": %.2f, \"cy\": %.2f, \"hfov_deg\": %.2f},\n"
+      " \"camera_to_base_link\": {\"xyz\": [%.3f, %.3f, %.3f], \"rpy_deg\": [0, %.3f, 0]},\n"
+      " \"lidar_to_base_link\": {\"xyz\": [%.3f, %.3f, %.3f], \"rpy_deg\": [0, 0, 0]},\n"
+      " \"town_extent_m\": %.1f, \"lidar\": %s, \"beams\": %d}\n",
+      o.split.c_str(), o.lighting.c_str(), o.town_seed, o.route_seed, path.size(), o.width,
+      o.height, f, f, o.width / 2.0 - 0.5, o.height / 2.0 - 0.5, o.hfov_deg, o.cam_x, o.cam_y,
+      o.cam_z, o.cam_pitch_deg, o.lidar_x, o.lidar_y, o.lidar_z, town.extent,
+      o.lidar ? "true" : "false", o.beams);
+  std::fclose(j);
+  std::printf("aprt_synth: %zu frames (%s, %s) -> %s\n", path.size(), o.split.c_str(),
+              o.lighting.c_str(), o.out.c_str());
+  return 0;
+}
+
+}  // namespace
+}  // namespace aprt::synth
+
+int main(int argc, char** argv) {
+  return aprt::synth::run(argc, argv);
+}

@@ -1,0 +1,54 @@
+// Ray casting against the town: a 2-D grid over the ground plane lists the
+// primitives in each cell; a ray walks the cells it crosses (DDA) and stops at
+// the first hit that lies inside the cell being walked.
+#pragma once
+
+#include <vector>
+
+#include "tools/synth/town.h"
+
+namespace aprt::synth {
+
+struct Hit {
+  double t = 0;
+  Vec3 point;
+  Vec3 normal;
+  Color albedo;
+  bool sky = true;
+};
+
+struct Lighting {
+  Vec3 sun_dir{0.45, 0.45, 0.77};  // towards the sun, unit
+  Color sun{1.0f, 0.97f, 0.9f};
+  Color ambient{0.35f, 0.38f, 0.45f};
+  Color sky_horizon{0.75f, 0.82f, 0.92f};
+  Color sky_zenith{0.32f, 0.5f, 0.85f};
+  Color fog{0.75f, 0.8f, 0.88f};
+  double fog_distance = 600.0;  // e-folding distance of the haze, metres
+  double exposure = 1.0;
+};
+
+class Scene {
+ public:
+  explicit Scene(const Town& town);
+  bool intersect(Vec3 origin, Vec3 dir, double t_max, Hit* hit) const;
+  // Shaded colour seen along a ray (hard shadows from the sun).
+  Color shade(Vec3 origin, Vec3 dir, const Lighting& light) const;
+  const Town& town() const { return town_; }
+
+ private:
+  struct Ref {
+    int kind;  // 0 box, 1 cylinder, 2 sphere
+    int index;
+  };
+  bool hit_cell(int cx, int cy, Vec3 o, Vec3 d, double t_min, double t_max, Hit* hit) const;
+  Color surface(const Box& b, Vec3 p, Vec3 n) const;
+
+  const Town& town_;
+  double origin_ = -40.0;  // grid covers [origin_, origin_ + cells_ * cell_] in x and y
+  double cell_ = 10.0;
+  int cells_ = 0;
+  std::vector<std::vector<Ref>> grid_;
+};
+
+}  // namespace aprt::synth
