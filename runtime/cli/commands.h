@@ -6,5 +6,7 @@ namespace aprt::cli {
 
 int cmd_info(int argc, char** argv);
 int cmd_bench(int argc, char** argv);
+int cmd_eval(int argc, char** argv);
+int cmd_run(int argc, char** argv);
 
 }  // namespace aprt::cli

@@ -11,8 +11,10 @@ void usage(FILE* out) {
                "usage: aprt <command> [options]\n"
                "\n"
                "commands:\n"
+               "  run            the service; with no options, the demo drive\n"
                "  info MODEL     what a model file holds: metadata, ops, memory plan\n"
                "  bench MODEL    latency and memory of a model on this machine\n"
+               "  eval           errors of a model on a labelled sequence\n"
                "\n"
                "Run 'aprt <command> --help' for the command's options.\n");
 }
@@ -25,8 +27,10 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   const char* cmd = argv[1];
+  if (!std::strcmp(cmd, "run")) return aprt::cli::cmd_run(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "info")) return aprt::cli::cmd_info(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "bench")) return aprt::cli::cmd_bench(argc - 1, argv + 1);
+  if (!std::strcmp(cmd, "eval")) return aprt::cli::cmd_eval(argc - 1, argv + 1);
   std::fprintf(stderr, "aprt: unknown command '%s'\n", cmd);
   usage(stderr);
   return 2;

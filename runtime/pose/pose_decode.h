@@ -13,12 +13,10 @@
 
 namespace aprt {
 
-enum PoseFlag : uint32_t {
-  kPoseNonFinite = 1u << 0,       // NaN/Inf in the raw output
-  kPoseQuatDegenerate = 1u << 1,  // |q| too small to normalise
-  kPoseQuatNorm = 1u << 2,        // raw |q| far from 1 (outside [0.5, 2])
-  kPoseOutOfBounds = 1u << 3,     // position outside the map bounds plus margin
-};
+inline constexpr uint32_t kPoseNonFinite = 1u << 0;       // NaN/Inf in the raw output
+inline constexpr uint32_t kPoseQuatDegenerate = 1u << 1;  // |q| too small to normalise
+inline constexpr uint32_t kPoseQuatNorm = 1u << 2;        // raw |q| far from 1 (not in [0.5, 2])
+inline constexpr uint32_t kPoseOutOfBounds = 1u << 3;     // outside the map bounds plus margin
 
 struct PoseEstimate {
   double position[3] = {};               // metres, map frame of the training data

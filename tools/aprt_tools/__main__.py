@@ -72,6 +72,26 @@ def cmd_convert(a):
     print(f"convert: {a.output}: {report.text()}")
 
 
+def cmd_train(a):
+    from .export import export_onnx
+    from .train import train
+
+    model, cfg = train(a.data, a.out, size=a.size, minutes=a.minutes, batch=a.batch, lr=a.lr,
+                       seed=a.seed, threads=a.threads, hidden=a.hidden, layers=a.layers)
+    model.eval()
+    with open(f"{a.out}/model.onnx", "wb") as f:
+        f.write(export_onnx(model, 13))
+    a.onnx, a.output, a.config_json = f"{a.out}/model.onnx", f"{a.out}/model.aprt", f"{a.out}/model.json"
+    cmd_convert(a)
+
+
+def cmd_preprocess_golden(a):
+    from .preprocess_golden import write_cases
+
+    n = write_cases(a.out)
+    print(f"preprocess-golden: {n} frames -> {a.out}")
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(prog="python3 -m aprt_tools", description=__doc__)
     sub = p.add_subparsers(dest="cmd", required=True)
@@ -105,6 +125,23 @@ def main(argv=None):
     c.add_argument("--std", type=_floats, help="per-channel normalisation std")
     c.add_argument("--imagenet", action="store_true", help="ImageNet mean/std (image models)")
     c.set_defaults(fn=cmd_convert)
+
+    t = sub.add_parser("train", help="train the reference model on a DeepLoc-layout sequence (CPU)")
+    t.add_argument("--data", required=True, help="folder with poses.txt and the images")
+    t.add_argument("--out", required=True)
+    t.add_argument("--size", type=int, default=128)
+    t.add_argument("--minutes", type=float, default=90.0, help="wall-clock training budget")
+    t.add_argument("--batch", type=int, default=16)
+    t.add_argument("--lr", type=float, default=1e-4)
+    t.add_argument("--seed", type=int, default=1)
+    t.add_argument("--threads", type=int, default=2)
+    t.add_argument("--hidden", type=int, default=128, help="transformer width (d_model)")
+    t.add_argument("--layers", type=int, default=3, help="encoder and decoder layers per branch")
+    t.set_defaults(fn=cmd_train)
+
+    pg = sub.add_parser("preprocess-golden", help="frames and expected inputs for the C++ tests")
+    pg.add_argument("--out", required=True)
+    pg.set_defaults(fn=cmd_preprocess_golden)
 
     a = p.parse_args(argv)
     a.fn(a)

@@ -36,6 +36,7 @@ class AprConfig:
     enc_layers: int = 6
     dec_layers: int = 6
     head_dim: int = 1024  # width of the regressor MLPs
+    dropout: float = 0.0  # transformer dropout while training (DETR uses 0.1)
     pos_embed_cells: int = 50  # rows/cols of the learned position tables
     mean: tuple = IMAGENET_MEAN
     std: tuple = IMAGENET_STD
@@ -131,7 +132,7 @@ class AprTransformer(nn.Module):
 
         def transformer():
             return Transformer(cfg.hidden_dim, cfg.nheads, cfg.enc_layers, cfg.dec_layers,
-                               cfg.dim_feedforward)
+                               cfg.dim_feedforward, cfg.dropout)
 
         self.transformer_t = transformer()
         self.transformer_rot = transformer()

@@ -1,0 +1,52 @@
+// Pixel formats and the crop/resize geometry shared by the preprocessing
+// kernels (camera frames -> the network's input tensor).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace aprt::kernels {
+
+enum class PixelFormat : uint8_t {
+  kRgb24,  // R G B bytes
+  kBgr24,  // B G R bytes
+  kYuyv,   // Y0 U Y1 V (4:2:2), BT.601 limited range
+  kUyvy,   // U Y0 V Y1
+  kNv12,   // Y plane, then interleaved U V plane at half resolution (4:2:0)
+  kGray8,
+};
+
+const char* pixel_format_name(PixelFormat f);
+// Bytes per row a tightly packed frame of this width needs (the Y plane for NV12).
+size_t min_stride(PixelFormat f, int width);
+// Bytes of a tightly packed frame.
+size_t frame_bytes(PixelFormat f, int width, int height);
+
+struct ImageView {
+  const uint8_t* data;
+  PixelFormat format;
+  int width, height;
+  size_t stride;  // bytes per row (of the Y plane for NV12; the UV plane follows height rows later)
+};
+
+// The training transform (docs/preprocessing.md): centre square crop, bilinear
+// resize with half-pixel centres to size x size, values / 255, then
+// (v - mean[c]) / std[c]; output NHWC float [size][size][3] (or 1 channel).
+struct PreprocessParams {
+  int size;
+  int channels;  // 3 (RGB) or 1 (gray)
+  float mean[3];
+  float std[3];
+};
+
+// YUV (BT.601, limited range) -> 8-bit RGB, rounded: the one formula both the
+// kernels and the Python reference use.
+inline void yuv_to_rgb(int y, int u, int v, uint8_t* rgb) {
+  const int c = y - 16, d = u - 128, e = v - 128;
+  auto clamp = [](int x) { return uint8_t(x < 0 ? 0 : (x > 255 ? 255 : x)); };
+  rgb[0] = clamp((298 * c + 409 * e + 128) >> 8);
+  rgb[1] = clamp((298 * c - 100 * d - 208 * e + 128) >> 8);
+  rgb[2] = clamp((298 * c + 516 * d + 128) >> 8);
+}
+
+}  // namespace aprt::kernels

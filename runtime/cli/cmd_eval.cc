@@ -1,0 +1,167 @@
+// aprt eval --model MODEL --data DIR [--csv FILE] [--json] [--threads N] [--isa X] [--limit N]
+//
+// Runs the model on every frame of a labelled sequence (DeepLoc layout) and
+// reports position and orientation errors: median, mean, p90, max; per-frame
+// rows with --csv (plot them with `python3 -m aprt_tools plot-eval`).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <vector>
+
+#include "drivers/frame/frame.h"
+#include "drivers/replay/deeploc_replay.h"
+#include "kernels/common/preprocess_image.h"
+#include "runtime/cli/args.h"
+#include "runtime/cli/commands.h"
+#include "runtime/engine/engine.h"
+#include "runtime/pose/pose_decode.h"
+
+namespace aprt::cli {
+namespace {
+
+double quat_angle_deg(const double* a, const double* b) {
+  double d = 0;
+  for (int i = 0; i < 4; ++i) d += a[i] * b[i];
+  d = std::min(1.0, std::fabs(d));
+  return 2.0 * std::acos(d) * 180.0 / M_PI;
+}
+
+struct Stats {
+  double median, mean, p90, max;
+};
+
+Stats stats(std::vector<double> v) {
+  if (v.empty()) return {0, 0, 0, 0};
+  std::sort(v.begin(), v.end());
+  double sum = 0;
+  for (double x : v) sum += x;
+  auto q = [&](double p) {
+    return v[std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5))];
+  };
+  return {q(0.5), sum / double(v.size()), q(0.9), v.back()};
+}
+
+}  // namespace
+
+int cmd_eval(int argc, char** argv) {
+  Args args(argc, argv);
+  if (args.flag("--help")) {
+    std::printf(
+        "usage: aprt eval --model MODEL --data DIR [options]\n"
+        "  --csv FILE    per-frame predictions, truth and errors\n"
+        "  --json        summary as one JSON object\n"
+        "  --limit N     only the first N frames\n"
+        "  --threads N   --isa NAME   as for aprt bench\n");
+    return 0;
+  }
+  const char* model_path = args.value("--model");
+  const char* data = args.value("--data");
+  const char* csv_path = args.value("--csv");
+  const bool json = args.flag("--json");
+  const long limit = args.integer("--limit", 0, 0, 100000000);
+  const long threads = args.integer("--threads", 1, 1, 16);
+  const char* isa = args.value("--isa");
+  if (args.error() || !model_path || !data || args.leftover()) {
+    std::fprintf(stderr, "aprt eval: usage: aprt eval --model MODEL --data DIR [--csv FILE]\n");
+    return 2;
+  }
+  EngineOptions opts;
+  opts.threads = int(threads);
+  opts.isa = isa;
+  opts.expect_modality = uint32_t(format::Modality::kImage);
+  auto loaded = Engine::load_file(model_path, opts);
+  if (!loaded) {
+    std::fprintf(stderr, "aprt eval: %s\n", loaded.error().message());
+    return 2;
+  }
+  Engine& e = *loaded.value();
+  auto replay = DeeplocReplay::open(data);
+  if (!replay) {
+    std::fprintf(stderr, "aprt eval: %s\n", replay.error().message());
+    return 2;
+  }
+  DeeplocReplay& r = *replay.value();
+  const ModelMeta& m = e.meta();
+  kernels::PreprocessParams pp{int(m.input_shape[1]), int(m.input_shape[3]), {}, {}};
+  for (int c = 0; c < m.norm_channels; ++c) {
+    pp.mean[c] = m.norm_mean[c];
+    pp.std[c] = m.norm_std[c];
+  }
+  auto plan = std::make_unique<kernels::PreprocessPlan>();
+  if (!kernels::plan_preprocess(pp, kernels::PixelFormat::kRgb24, r.width(), r.height(),
+                                plan.get())) {
+    std::fprintf(stderr, "aprt eval: cannot map %dx%d frames to the %dx%d input\n", r.width(),
+                 r.height(), pp.size, pp.size);
+    return 2;
+  }
+  std::vector<uint8_t> pixels(r.frame_bytes());
+  FrameBuffer frame;
+  frame.data = pixels.data();
+  frame.capacity = pixels.size();
+  FILE* csv = nullptr;
+  if (csv_path) {
+    csv = std::fopen(csv_path, "w");
+    if (!csv) {
+      std::fprintf(stderr, "aprt eval: cannot write %s\n", csv_path);
+      return 1;
+    }
+    std::fprintf(csv,
+                 "name,x,y,z,qw,qx,qy,qz,gt_x,gt_y,gt_z,gt_qw,gt_qx,gt_qy,gt_qz,"
+                 "position_error_m,orientation_error_deg,flags\n");
+  }
+  const size_t n = limit > 0 ? std::min(size_t(limit), r.size()) : r.size();
+  std::vector<double> pos_err, rot_err;
+  size_t bad_frames = 0, flagged = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (Status s = r.read(i, &frame, i, 0); !s) {
+      std::fprintf(stderr, "aprt eval: frame %zu skipped: %s\n", i, s.error().message());
+      ++bad_frames;
+      continue;
+    }
+    kernels::preprocess_image(*plan, frame.view(), e.input().f32());
+    (void)e.run();
+    const PoseEstimate p = decode_pose(e.output().f32(), m);
+    if (!p.valid()) ++flagged;
+    double pe = 0;
+    for (int k = 0; k < 3; ++k)
+      pe += (p.position[k] - frame.info.truth_position[k]) *
+            (p.position[k] - frame.info.truth_position[k]);
+    pe = std::sqrt(pe);
+    const double oe = quat_angle_deg(p.orientation, frame.info.truth_orientation);
+    pos_err.push_back(pe);
+    rot_err.push_back(oe);
+    if (csv) {
+      const FrameInfo& f = frame.info;
+      std::fprintf(
+          csv,
+          "%s,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%u\n",
+          f.name, p.position[0], p.position[1], p.position[2], p.orientation[0], p.orientation[1],
+          p.orientation[2], p.orientation[3], f.truth_position[0], f.truth_position[1],
+          f.truth_position[2], f.truth_orientation[0], f.truth_orientation[1],
+          f.truth_orientation[2], f.truth_orientation[3], pe, oe, p.flags);
+    }
+  }
+  if (csv) std::fclose(csv);
+  const Stats ps = stats(pos_err), os = stats(rot_err);
+  if (json) {
+    std::printf(
+        "{\"model\": \"%s\", \"data\": \"%s\", \"frames\": %zu, \"skipped\": %zu, "
+        "\"flagged\": %zu, \"position_m\": {\"median\": %.4f, \"mean\": %.4f, \"p90\": %.4f, "
+        "\"max\": %.4f}, \"orientation_deg\": {\"median\": %.4f, \"mean\": %.4f, "
+        "\"p90\": %.4f, \"max\": %.4f}, \"isa\": \"%s\"}\n",
+        model_path, data, pos_err.size(), bad_frames, flagged, ps.median, ps.mean, ps.p90, ps.max,
+        os.median, os.mean, os.p90, os.max, e.isa());
+  } else {
+    std::printf("model        %s (%s kernels)\n", model_path, e.isa());
+    std::printf("sequence     %s: %zu frames evaluated, %zu skipped, %zu flagged\n", data,
+                pos_err.size(), bad_frames, flagged);
+    std::printf("position     median %.2f m  mean %.2f m  p90 %.2f m  max %.2f m\n", ps.median,
+                ps.mean, ps.p90, ps.max);
+    std::printf("orientation  median %.2f deg  mean %.2f deg  p90 %.2f deg  max %.2f deg\n",
+                os.median, os.mean, os.p90, os.max);
+  }
+  return bad_frames == n ? 1 : 0;
+}
+
+}  // namespace aprt::cli

@@ -1,0 +1,259 @@
+#include "runtime/config/config.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <initializer_list>
+
+#include "runtime/config/yaml_tree.h"
+
+namespace aprt {
+namespace {
+
+using yaml::Node;
+
+class Reader {
+ public:
+  explicit Reader(const std::string& origin) : origin_(origin) {}
+
+  Error fail(const Node* n, const std::string& path, const std::string& what) const {
+    return Error(Errc::kInvalidArgument, "%s:%d: %s: %s", origin_.c_str(), n ? n->line : 0,
+                 path.c_str(), what.c_str());
+  }
+
+  // `node` must be a map (or absent) with no keys outside `allowed`.
+  Status map(const Node* node, const std::string& path,
+             std::initializer_list<const char*> allowed) {
+    if (!node || node->kind == Node::kNull) return ok();
+    if (node->kind != Node::kMap) {
+      return fail(node, path.empty() ? "document" : path,
+                  path.empty() ? "the document must be a mapping" : "expected a mapping");
+    }
+    for (const auto& [key, value] : node->map) {
+      bool known = false;
+      for (const char* a : allowed) known = known || key == a;
+      if (!known) {
+        std::string list;
+        for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
+        return fail(value.get(), join(path, key.c_str()),
+                    "unknown key (expected one of: " + list + ")");
+      }
+    }
+    return ok();
+  }
+
+  Status str(const Node* m, const std::string& path, const char* key, std::string* out,
+             std::initializer_list<const char*> choices = {}) {
+    const Node* n = m ? m->get(key) : nullptr;
+    if (!n || n->kind == Node::kNull) return ok();
+    const std::string p = join(path, key);
+    if (n->kind != Node::kScalar) return fail(n, p, "expected a string");
+    if (choices.size()) {
+      bool found = false;
+      std::string list;
+      for (const char* c : choices) {
+        found = found || n->scalar == c;
+        list += std::string(list.empty() ? "" : ", ") + c;
+      }
+      if (!found) return fail(n, p, "'" + n->scalar + "' is not one of: " + list);
+    }
+    *out = n->scalar;
+    return ok();
+  }
+
+  Status num(const Node* m, const std::string& path, const char* key, double lo, double hi,
+             double* out) {
+    const Node* n = m ? m->get(key) : nullptr;
+    if (!n || n->kind == Node::kNull) return ok();
+    const std::string p = join(path, key);
+    char* end = nullptr;
+    errno = 0;
+    const double v =
+        n->kind == Node::kScalar && !n->quoted ? std::strtod(n->scalar.c_str(), &end) : NAN;
+    if (n->kind != Node::kScalar || n->quoted || !end || *end || errno || !std::isfinite(v) ||
+        v < lo || v > hi) {
+      char range[96];
+      std::snprintf(range, sizeof range, "expected a number in [%g, %g], got '%s'", lo, hi,
+                    n->kind == Node::kScalar ? n->scalar.c_str() : "(not a scalar)");
+      return fail(n, p, range);
+    }
+    *out = v;
+    return ok();
+  }
+
+  Status integer(const Node* m, const std::string& path, const char* key, long lo, long hi,
+                 int* out) {
+    const Node* n = m ? m->get(key) : nullptr;
+    if (!n || n->kind == Node::kNull) return ok();
+    const std::string p = join(path, key);
+    char* end = nullptr;
+    errno = 0;
+    const long v = n->kind == Node::kScalar ? std::strtol(n->scalar.c_str(), &end, 10) : 0;
+    if (n->kind != Node::kScalar || n->quoted || !end || *end || errno || v < lo || v > hi ||
+        n->scalar.empty()) {
+      char range[96];
+      std::snprintf(range, sizeof range, "expected an integer in [%ld, %ld], got '%s'", lo, hi,
+                    n->kind == Node::kScalar ? n->scalar.c_str() : "(not a scalar)");
+      return fail(n, p, range);
+    }
+    *out = int(v);
+    return ok();
+  }
+
+  Status boolean(const Node* m, const std::string& path, const char* key, bool* out) {
+    const Node* n = m ? m->get(key) : nullptr;
+    if (!n || n->kind == Node::kNull) return ok();
+    const std::string p = join(path, key);
+    if (n->kind == Node::kScalar && !n->quoted && (n->scalar == "true" || n->scalar == "false")) {
+      *out = n->scalar == "true";
+      return ok();
+    }
+    return fail(n, p,
+                "expected true or false, got '" +
+                    (n->kind == Node::kScalar ? n->scalar : std::string("(not a scalar)")) + "'");
+  }
+
+  Status int_list(const Node* m, const std::string& path, const char* key, long lo, long hi,
+                  std::vector<int>* out) {
+    const Node* n = m ? m->get(key) : nullptr;
+    if (!n || n->kind == Node::kNull) return ok();
+    const std::string p = join(path, key);
+    if (n->kind != Node::kSeq) return fail(n, p, "expected a list of integers");
+    out->clear();
+    for (size_t i = 0; i < n->seq.size(); ++i) {
+      const Node* e = n->seq[i].get();
+      char* end = nullptr;
+      const long v = e->kind == Node::kScalar ? std::strtol(e->scalar.c_str(), &end, 10) : 0;
+      if (e->kind != Node::kScalar || !end || *end || v < lo || v > hi || e->scalar.empty()) {
+        return fail(
+            e, p + "[" + std::to_string(i) + "]",
+            "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+      }
+      out->push_back(int(v));
+    }
+    return ok();
+  }
+
+  static std::string join(const std::string& path, const char* key) {
+    return path.empty() ? std::string(key) : path + "." + key;
+  }
+
+ private:
+  std::string origin_;
+};
+
+Status read_thread(Reader& r, const Node* root, const char* name, ThreadConfig* t) {
+  const std::string path = std::string("threads.") + name;
+  const Node* n = root ? root->get(name) : nullptr;
+  Status s;
+  if (!(s = r.map(n, path, {"priority", "cpu"}))) return s;
+  if (!(s = r.integer(n, path, "priority", 0, 99, &t->priority))) return s;
+  return r.integer(n, path, "cpu", -1, 1023, &t->cpu);
+}
+
+}  // namespace
+
+Expected<Config> parse_config(const std::string& text, const std::string& origin) {
+  auto tree = yaml::parse(text, origin);
+  if (!tree) return tree.error();
+  const Node* root = tree->get();
+  Reader r(origin);
+  Config c;
+  c.origin = origin;
+  Status s;
+#define APRT_TRY(expr) \
+  if (!(s = (expr))) return s.error()
+  APRT_TRY(
+      r.map(root, "", {"model", "engine", "source", "output", "supervisor", "sanity", "threads"}));
+  if (root && root->kind == Node::kMap) {
+    APRT_TRY(r.str(root, "", "model", &c.model));
+    const Node* e = root->get("engine");
+    APRT_TRY(r.map(e, "engine", {"threads", "isa", "cpus"}));
+    APRT_TRY(r.integer(e, "engine", "threads", 1, 16, &c.engine.threads));
+    APRT_TRY(r.str(e, "engine", "isa", &c.engine.isa, {"auto", "ref", "avx512", "avx2", "neon"}));
+    APRT_TRY(r.int_list(e, "engine", "cpus", 0, 1023, &c.engine.cpus));
+
+    const Node* src = root->get("source");
+    APRT_TRY(r.map(src, "source", {"type", "replay", "v4l2"}));
+    APRT_TRY(r.str(src, "source", "type", &c.source.type, {"replay", "v4l2", "libcamera"}));
+    const Node* rp = src ? src->get("replay") : nullptr;
+    APRT_TRY(r.map(rp, "source.replay", {"path", "rate_hz", "loop"}));
+    APRT_TRY(r.str(rp, "source.replay", "path", &c.source.replay.path));
+    if (rp && rp->get("rate_hz") && rp->get("rate_hz")->scalar == "recorded") {
+      c.source.replay.recorded = true;
+    } else {
+      APRT_TRY(r.num(rp, "source.replay", "rate_hz", 0, 1000, &c.source.replay.rate_hz));
+    }
+    APRT_TRY(r.boolean(rp, "source.replay", "loop", &c.source.replay.loop));
+    const Node* v = src ? src->get("v4l2") : nullptr;
+    APRT_TRY(r.map(v, "source.v4l2", {"device", "width", "height", "format", "fps", "buffers"}));
+    APRT_TRY(r.str(v, "source.v4l2", "device", &c.source.v4l2.device));
+    APRT_TRY(r.integer(v, "source.v4l2", "width", 16, 8192, &c.source.v4l2.width));
+    APRT_TRY(r.integer(v, "source.v4l2", "height", 16, 8192, &c.source.v4l2.height));
+    APRT_TRY(r.str(v, "source.v4l2", "format", &c.source.v4l2.format,
+                   {"YUYV", "UYVY", "NV12", "RGB24", "BGR24", "MJPEG"}));
+    APRT_TRY(r.integer(v, "source.v4l2", "fps", 1, 1000, &c.source.v4l2.fps));
+    APRT_TRY(r.integer(v, "source.v4l2", "buffers", 2, 32, &c.source.v4l2.buffers));
+
+    const Node* out = root->get("output");
+    APRT_TRY(r.map(out, "output", {"console", "summary"}));
+    APRT_TRY(r.boolean(out, "output", "console", &c.output.console));
+    APRT_TRY(r.boolean(out, "output", "summary", &c.output.summary));
+
+    const Node* sv = root->get("supervisor");
+    APRT_TRY(r.map(sv, "supervisor",
+                   {"rate_hz", "frame_timeout_ms", "inference_deadline_ms", "fault_after_s",
+                    "watchdog_device", "watchdog_timeout_s", "systemd"}));
+    APRT_TRY(r.num(sv, "supervisor", "rate_hz", 1, 1000, &c.supervisor.rate_hz));
+    APRT_TRY(r.num(sv, "supervisor", "frame_timeout_ms", 1, 60000, &c.supervisor.frame_timeout_ms));
+    APRT_TRY(r.num(sv, "supervisor", "inference_deadline_ms", 1, 60000,
+                   &c.supervisor.inference_deadline_ms));
+    APRT_TRY(r.num(sv, "supervisor", "fault_after_s", 0.1, 3600, &c.supervisor.fault_after_s));
+    APRT_TRY(r.str(sv, "supervisor", "watchdog_device", &c.supervisor.watchdog_device));
+    APRT_TRY(r.integer(sv, "supervisor", "watchdog_timeout_s", 1, 600,
+                       &c.supervisor.watchdog_timeout_s));
+    APRT_TRY(r.boolean(sv, "supervisor", "systemd", &c.supervisor.systemd));
+
+    const Node* sa = root->get("sanity");
+    APRT_TRY(r.map(sa, "sanity", {"bounds_margin", "max_jump_m", "max_speed_mps"}));
+    APRT_TRY(r.num(sa, "sanity", "bounds_margin", 0, 10, &c.sanity.bounds_margin));
+    APRT_TRY(r.num(sa, "sanity", "max_jump_m", 0, 1e6, &c.sanity.max_jump_m));
+    APRT_TRY(r.num(sa, "sanity", "max_speed_mps", 0, 1000, &c.sanity.max_speed_mps));
+
+    const Node* th = root->get("threads");
+    APRT_TRY(
+        r.map(th, "threads", {"capture", "inference", "publish", "supervisor", "lock_memory"}));
+    APRT_TRY(read_thread(r, th, "capture", &c.threads.capture));
+    APRT_TRY(read_thread(r, th, "inference", &c.threads.inference));
+    APRT_TRY(read_thread(r, th, "publish", &c.threads.publish));
+    APRT_TRY(read_thread(r, th, "supervisor", &c.threads.supervisor));
+    APRT_TRY(r.boolean(th, "threads", "lock_memory", &c.threads.lock_memory));
+  } else if (root && root->kind != Node::kNull) {
+    return Error(Errc::kInvalidArgument, "%s:%d: the document must be a mapping", origin.c_str(),
+                 root->line);
+  }
+#undef APRT_TRY
+  if (c.model.empty()) {
+    return Error(Errc::kInvalidArgument, "%s: 'model' (path of the .aprt file) is required",
+                 origin.c_str());
+  }
+  if (c.source.type == "replay" && c.source.replay.path.empty()) {
+    return Error(Errc::kInvalidArgument, "%s: source.replay.path is required for a replay source",
+                 origin.c_str());
+  }
+  return c;
+}
+
+Expected<Config> load_config(const std::string& path) {
+  FILE* f = std::fopen(path.c_str(), "r");
+  if (!f) return Error(Errc::kIo, "config: cannot open '%s'", path.c_str());
+  std::string text;
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) text.append(buf, n);
+  std::fclose(f);
+  return parse_config(text, path);
+}
+
+}  // namespace aprt

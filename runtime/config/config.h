@@ -1,0 +1,78 @@
+// aprt's configuration: the typed form of the YAML file `aprt run --config`
+// reads (schema and defaults: docs/configuration.md). Every key is checked:
+// unknown keys, wrong types and out-of-range values are refused with the key
+// path and line ("aprt.yaml:12: source.replay.rate_hz: expected a number in
+// [0, 1000], got 'fast'").
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "runtime/common/expected.h"
+
+namespace aprt {
+
+struct ThreadConfig {
+  int priority = 0;  // SCHED_FIFO priority 1..99; 0 = normal scheduling
+  int cpu = -1;      // pin to this CPU; -1 = no pinning
+};
+
+struct Config {
+  std::string origin = "<defaults>";  // where it came from, for messages
+  std::string model;
+
+  struct Engine {
+    int threads = 1;
+    std::string isa = "auto";
+    std::vector<int> cpus;  // worker pinning
+  } engine;
+
+  struct Source {
+    std::string type = "replay";  // replay | v4l2 | libcamera
+    struct Replay {
+      std::string path;
+      double rate_hz = 10.0;  // 0: as fast as inference takes frames; "recorded": times.txt
+      bool recorded = false;
+      bool loop = false;
+    } replay;
+    struct V4l2 {
+      std::string device = "/dev/video0";
+      int width = 640, height = 480;
+      std::string format = "YUYV";
+      int fps = 30;
+      int buffers = 4;
+    } v4l2;
+  } source;
+
+  struct Output {
+    bool console = true;  // a line per pose (with errors when the source has ground truth)
+    bool summary = true;  // statistics at exit
+  } output;
+
+  struct Supervisor {
+    double rate_hz = 50.0;
+    double frame_timeout_ms = 1000.0;  // no new frame for this long: DEGRADED
+    double inference_deadline_ms = 200.0;
+    double fault_after_s = 10.0;  // DEGRADED this long: FAULT
+    std::string watchdog_device;  // e.g. /dev/watchdog; empty: none
+    int watchdog_timeout_s = 5;
+    bool systemd = true;  // sd_notify READY/WATCHDOG/STATUS if NOTIFY_SOCKET is set
+  } supervisor;
+
+  struct Sanity {
+    double bounds_margin = 0.1;   // of the map extent, each side
+    double max_jump_m = 30.0;     // between consecutive poses (0: off)
+    double max_speed_mps = 60.0;  // jump allowance grows with time since the last pose
+  } sanity;
+
+  struct Threads {
+    ThreadConfig capture, inference, publish, supervisor;
+    bool lock_memory = true;  // mlockall
+  } threads;
+};
+
+// Parses and validates a YAML file.
+Expected<Config> load_config(const std::string& path);
+Expected<Config> parse_config(const std::string& text, const std::string& origin);
+
+}  // namespace aprt

@@ -1,0 +1,31 @@
+// A YAML document as a small tree with source lines, parsed with libyaml.
+// Configuration is read once at start-up (allocation allowed there); the
+// typed config (config.h) validates it against the schema with messages
+// naming the key path and line.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "runtime/common/expected.h"
+
+namespace aprt::yaml {
+
+struct Node {
+  enum Kind { kScalar, kMap, kSeq, kNull } kind = kNull;
+  int line = 0;  // 1-based
+  std::string scalar;
+  bool quoted = false;
+  std::vector<std::pair<std::string, std::unique_ptr<Node>>> map;  // in file order
+  std::vector<std::unique_ptr<Node>> seq;
+
+  const Node* get(const std::string& key) const;
+};
+
+// Parses text; errors name the file (`origin`) and line.
+Expected<std::unique_ptr<Node>> parse(const std::string& text, const std::string& origin);
+Expected<std::unique_ptr<Node>> parse_file(const std::string& path);
+
+}  // namespace aprt::yaml

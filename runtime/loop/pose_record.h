@@ -1,0 +1,34 @@
+// What the inference thread hands to the publishers for every frame it ran.
+#pragma once
+
+#include <cstdint>
+
+#include "runtime/pose/pose_decode.h"
+
+namespace aprt {
+
+// Flags the loop adds to the pose's own (runtime/pose/pose_decode.h, bits 0..3).
+inline constexpr uint32_t kPoseStaleFrame = 1u << 8;      // frame older than frame_timeout
+inline constexpr uint32_t kPoseDeadlineMissed = 1u << 9;  // inference over its deadline
+inline constexpr uint32_t kPoseJump = 1u << 10;           // implausible jump from the last pose
+
+enum class RunState : uint8_t { kStarting, kRunning, kDegraded, kFault, kStopping };
+const char* run_state_name(RunState s);
+
+struct PoseRecord {
+  uint64_t index = 0;           // n-th pose of this run
+  uint64_t frame_sequence = 0;  // source frame counter
+  uint32_t source = 0;
+  int64_t capture_ns = 0;  // the frame's capture time: the pose's timestamp
+  int64_t inference_start_ns = 0;
+  int64_t inference_end_ns = 0;
+  PoseEstimate pose;   // sensor pose in the map frame
+  uint32_t flags = 0;  // pose flags | loop flags; 0 = valid
+  RunState state = RunState::kStarting;
+  bool has_truth = false;
+  double truth_position[3] = {};
+  double truth_orientation[4] = {1, 0, 0, 0};
+  char name[128] = {};
+};
+
+}  // namespace aprt

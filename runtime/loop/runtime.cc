@@ -1,0 +1,475 @@
+#include "runtime/loop/runtime.h"
+
+#include <fcntl.h>
+#include <linux/watchdog.h>
+#include <sched.h>
+#include <sys/ioctl.h>
+#include <sys/mman.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include "drivers/replay/replay_source.h"
+
+namespace aprt {
+namespace {
+
+constexpr int64_t kWaitNs = 100 * 1000 * 1000;  // every blocking wait is bounded by this
+
+// systemd's notification protocol (sd_notify(3)): one datagram to $NOTIFY_SOCKET.
+void sd_notify_text(const char* text) {
+  const char* path = std::getenv("NOTIFY_SOCKET");
+  if (!path || !*path) return;
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  const size_t n = std::strlen(path);
+  if (n >= sizeof addr.sun_path) return;
+  std::memcpy(addr.sun_path, path, n);
+  if (addr.sun_path[0] == '@') addr.sun_path[0] = '\0';  // abstract namespace
+  const int fd = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return;
+  sendto(fd, text, std::strlen(text), MSG_NOSIGNAL, reinterpret_cast<sockaddr*>(&addr),
+         socklen_t(offsetof(sockaddr_un, sun_path) + n));
+  close(fd);
+}
+
+double yaw_deg(const double* q) {
+  const double w = q[0], x = q[1], y = q[2], z = q[3];
+  return std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)) * 180.0 / M_PI;
+}
+
+double angle_deg(const double* a, const double* b) {
+  double d = 0;
+  for (int i = 0; i < 4; ++i) d += a[i] * b[i];
+  return 2.0 * std::acos(std::min(1.0, std::fabs(d))) * 180.0 / M_PI;
+}
+
+template <class T>
+double percentile(std::vector<T> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return double(v[std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5))]);
+}
+
+}  // namespace
+
+Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
+  std::unique_ptr<Runtime> r(new (std::nothrow) Runtime());
+  if (!r) return Error(Errc::kOutOfMemory, "run: out of memory");
+  r->config_ = config;
+  r->supervisor_ = Supervisor(config.supervisor);
+  EngineOptions eo;
+  eo.threads = config.engine.threads;
+  eo.isa = config.engine.isa.c_str();
+  eo.cpus = config.engine.cpus.empty() ? nullptr : config.engine.cpus.data();
+  eo.n_cpus = int(config.engine.cpus.size());
+  eo.expect_modality = uint32_t(format::Modality::kImage);
+  auto engine = Engine::load_file(config.model.c_str(), eo);
+  if (!engine) return engine.error();
+  r->engine_ = std::move(engine.value());
+
+  if (config.source.type != "replay") {
+    return Error(Errc::kUnsupported, "run: source type '%s' is not available in this build yet",
+                 config.source.type.c_str());
+  }
+  ReplayPacing pacing{config.source.replay.rate_hz, config.source.replay.recorded,
+                      config.source.replay.loop};
+  auto replay = ReplaySource::open(config.source.replay.path.c_str(), pacing);
+  if (!replay) return replay.error();
+  const int width = replay.value()->replay().width(), height = replay.value()->replay().height();
+  const size_t frames = replay.value()->replay().size();
+  r->source_ = std::move(replay.value());
+
+  auto slot = FrameSlot::create(r->source_->max_frame_bytes());
+  if (!slot) return slot.error();
+  r->slot_ = std::move(slot.value());
+  if (config.source.replay.rate_hz == 0 && !config.source.replay.recorded) {
+    static_cast<ReplaySource*>(r->source_.get())->pace_with(r->slot_.get());
+  }
+  const ModelMeta& m = r->engine_->meta();
+  kernels::PreprocessParams pp{int(m.input_shape[1]), int(m.input_shape[3]), {}, {}};
+  for (int c = 0; c < m.norm_channels; ++c) {
+    pp.mean[c] = m.norm_mean[c];
+    pp.std[c] = m.norm_std[c];
+  }
+  r->plan_.reset(new (std::nothrow) kernels::PreprocessPlan());
+  if (!r->plan_ ||
+      !kernels::plan_preprocess(pp, kernels::PixelFormat::kRgb24, width, height, r->plan_.get())) {
+    return Error(Errc::kInvalidArgument, "run: cannot map %dx%d frames to the model's %dx%d input",
+                 width, height, pp.size, pp.size);
+  }
+  r->ring_.reset(new (std::nothrow) SpscRing<PoseRecord, 64>());
+  if (!r->ring_) return Error(Errc::kOutOfMemory, "run: out of memory");
+  const size_t capacity = config.source.replay.loop ? size_t(1) << 20 : frames + 16;
+  r->timings_.resize(capacity);
+  r->pos_errors_.reserve(capacity);
+  r->rot_errors_.reserve(capacity);
+  if (!config.supervisor.watchdog_device.empty()) {
+    r->watchdog_fd_ = open(config.supervisor.watchdog_device.c_str(), O_WRONLY | O_CLOEXEC);
+    if (r->watchdog_fd_ < 0) {
+      return Error(Errc::kIo, "run: cannot open watchdog %s: %s",
+                   config.supervisor.watchdog_device.c_str(), std::strerror(errno));
+    }
+    int timeout = config.supervisor.watchdog_timeout_s;
+    if (ioctl(r->watchdog_fd_, WDIOC_SETTIMEOUT, &timeout) != 0) {
+      std::fprintf(stderr,
+                   "aprt run: warning: watchdog refused a %d s timeout (%s); using its own\n",
+                   config.supervisor.watchdog_timeout_s, std::strerror(errno));
+    }
+  }
+  return r;
+}
+
+Runtime::~Runtime() {
+  request_stop();
+  pthread_t* ts[3] = {&capture_, &inference_, &publish_};
+  for (int i = 0; i < 3; ++i) {
+    if (threads_started_[i]) pthread_join(*ts[i], nullptr);
+  }
+  if (watchdog_fd_ >= 0) close(watchdog_fd_);
+}
+
+Status Runtime::start_thread(pthread_t* t, void* (*fn)(void*), const ThreadConfig& tc,
+                             const char* name) {
+  pthread_attr_t attr;
+  pthread_attr_init(&attr);
+  if (tc.priority > 0) {
+    sched_param sp{};
+    sp.sched_priority = tc.priority;
+    pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
+    pthread_attr_setschedpolicy(&attr, SCHED_FIFO);
+    pthread_attr_setschedparam(&attr, &sp);
+  }
+  int rc = pthread_create(t, &attr, fn, this);
+  if (rc == EPERM && tc.priority > 0) {
+    std::fprintf(stderr,
+                 "aprt run: warning: no permission for SCHED_FIFO priority %d on the %s thread "
+                 "(needs CAP_SYS_NICE or an rtprio limit); running it with normal scheduling\n",
+                 tc.priority, name);
+    pthread_attr_setinheritsched(&attr, PTHREAD_INHERIT_SCHED);
+    rc = pthread_create(t, &attr, fn, this);
+  }
+  pthread_attr_destroy(&attr);
+  if (rc != 0)
+    return Error(Errc::kOutOfMemory, "run: cannot start the %s thread: %s", name,
+                 std::strerror(rc));
+  pthread_setname_np(*t, name);
+  if (tc.cpu >= 0) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(tc.cpu, &set);
+    if (pthread_setaffinity_np(*t, sizeof set, &set) != 0) {
+      std::fprintf(stderr, "aprt run: warning: cannot pin the %s thread to CPU %d\n", name, tc.cpu);
+    }
+  }
+  return ok();
+}
+
+void* Runtime::capture_main(void* self) {
+  static_cast<Runtime*>(self)->capture_loop();
+  return nullptr;
+}
+void* Runtime::inference_main(void* self) {
+  static_cast<Runtime*>(self)->inference_loop();
+  return nullptr;
+}
+void* Runtime::publish_main(void* self) {
+  static_cast<Runtime*>(self)->publish_loop();
+  return nullptr;
+}
+
+void Runtime::capture_loop() {
+  if (Status s = source_->start(); !s) {
+    std::fprintf(stderr, "aprt run: %s\n", s.error().message());
+    source_failed_.store(true);
+    capture_done_.store(true);
+    return;
+  }
+  while (!stop_.load(std::memory_order_acquire)) {
+    capture_beat_.store(monotonic_ns(), std::memory_order_release);
+    switch (source_->next(&slot_->back(), kWaitNs)) {
+      case SourceResult::kFrame:
+        slot_->back().info.capture_ns = monotonic_ns();  // arrival, for frame age
+        slot_->publish();
+        frames_captured_.fetch_add(1, std::memory_order_relaxed);
+        break;
+      case SourceResult::kTimeout: break;
+      case SourceResult::kSkipped:
+        frames_skipped_.fetch_add(1, std::memory_order_relaxed);
+        std::fprintf(stderr, "aprt run: frame skipped: %s\n", source_->error().message());
+        break;
+      case SourceResult::kEndOfStream: capture_done_.store(true, std::memory_order_release); return;
+      case SourceResult::kFailed: source_failed_.store(true, std::memory_order_release); break;
+    }
+  }
+  capture_done_.store(true, std::memory_order_release);
+}
+
+void Runtime::inference_loop() {
+  Engine& e = *engine_;
+  const ModelMeta& m = e.meta();
+  const int64_t stale_ns = int64_t(config_.supervisor.frame_timeout_ms * 1e6);
+  const int64_t deadline_ns = int64_t(config_.supervisor.inference_deadline_ms * 1e6);
+  auto* replay =
+      config_.source.type == "replay" ? static_cast<ReplaySource*>(source_.get()) : nullptr;
+  uint64_t index = 0;
+  bool have_prev = false;
+  double prev[3] = {};
+  int64_t prev_ns = 0;
+  while (!stop_.load(std::memory_order_acquire)) {
+    inference_beat_.store(monotonic_ns(), std::memory_order_release);
+    const FrameBuffer* f = nullptr;
+    const uint32_t published = slot_->published();
+    if (!slot_->take(&f)) {
+      if (capture_done_.load(std::memory_order_acquire) && slot_->published() == published) {
+        if (!slot_->take(&f)) break;  // nothing left
+      } else {
+        slot_->wait(published, kWaitNs);
+        continue;
+      }
+    }
+    if (replay) replay->note_taken(f->info.sequence + 1);
+    PoseRecord rec;
+    rec.inference_start_ns = monotonic_ns();
+    rec.capture_ns = f->info.capture_ns;
+    rec.frame_sequence = f->info.sequence;
+    rec.source = f->info.source;
+    uint32_t flags = 0;
+    if (rec.inference_start_ns - f->info.capture_ns > stale_ns) flags |= kPoseStaleFrame;
+    if (f->info.width != plan_->width || f->info.height != plan_->height ||
+        f->info.format != plan_->format) {
+      if (!kernels::plan_preprocess(plan_->params, f->info.format, f->info.width, f->info.height,
+                                    plan_.get())) {
+        frames_skipped_.fetch_add(1, std::memory_order_relaxed);
+        continue;
+      }
+    }
+    kernels::preprocess_image(*plan_, f->view(), e.input().f32());
+    (void)e.run();
+    rec.pose = decode_pose(e.output().f32(), m, float(config_.sanity.bounds_margin));
+    rec.inference_end_ns = monotonic_ns();
+    flags |= rec.pose.flags;
+    if (rec.inference_end_ns - rec.inference_start_ns > deadline_ns) {
+      flags |= kPoseDeadlineMissed;
+      deadline_misses_.fetch_add(1, std::memory_order_relaxed);
+    }
+    if (have_prev && config_.sanity.max_jump_m > 0 && !(flags & kPoseNonFinite)) {
+      double d = 0;
+      for (int k = 0; k < 3; ++k)
+        d += (rec.pose.position[k] - prev[k]) * (rec.pose.position[k] - prev[k]);
+      const double dt = double(rec.capture_ns - prev_ns) * 1e-9;
+      if (std::sqrt(d) >
+          config_.sanity.max_jump_m + config_.sanity.max_speed_mps * std::max(0.0, dt)) {
+        flags |= kPoseJump;
+      }
+    }
+    if (!(flags & (kPoseNonFinite | kPoseOutOfBounds | kPoseJump))) {
+      for (int k = 0; k < 3; ++k) prev[k] = rec.pose.position[k];
+      prev_ns = rec.capture_ns;
+      have_prev = true;
+    }
+    rec.flags = flags;
+    rec.index = index++;
+    rec.state = RunState(state_.load(std::memory_order_relaxed));
+    rec.has_truth = f->info.has_truth;
+    for (int k = 0; k < 3; ++k) rec.truth_position[k] = f->info.truth_position[k];
+    for (int k = 0; k < 4; ++k) rec.truth_orientation[k] = f->info.truth_orientation[k];
+    std::snprintf(rec.name, sizeof rec.name, "%s", f->info.name);
+    last_frame_ns_.store(f->info.capture_ns, std::memory_order_release);
+    last_flags_.store(flags, std::memory_order_release);
+    poses_.fetch_add(1, std::memory_order_release);
+    if (flags) poses_flagged_.fetch_add(1, std::memory_order_relaxed);
+    if (!ring_->push(rec)) ring_full_.fetch_add(1, std::memory_order_relaxed);
+  }
+  inference_done_.store(true, std::memory_order_release);
+}
+
+void Runtime::print_pose(const PoseRecord& r) {
+  char flags[96];
+  pose_flags_text(r.flags & 0xff, flags, sizeof flags);
+  if (r.flags & kPoseStaleFrame)
+    std::strncat(flags, ",stale", sizeof flags - std::strlen(flags) - 1);
+  if (r.flags & kPoseDeadlineMissed)
+    std::strncat(flags, ",late", sizeof flags - std::strlen(flags) - 1);
+  if (r.flags & kPoseJump) std::strncat(flags, ",jump", sizeof flags - std::strlen(flags) - 1);
+  if (std::strncmp(flags, "ok,", 3) == 0)
+    std::memmove(flags, flags + 3, std::strlen(flags + 3) + 1);
+  const double t = double(r.capture_ns - started_ns_) * 1e-9;
+  const double ms = double(r.inference_end_ns - r.inference_start_ns) * 1e-6;
+  const double* p = r.pose.position;
+  if (r.has_truth) {
+    double d = 0;
+    for (int k = 0; k < 3; ++k) d += (p[k] - r.truth_position[k]) * (p[k] - r.truth_position[k]);
+    std::printf(
+        "%6llu %7.2fs  x %8.2f y %8.2f z %6.2f  yaw %7.1f  err %6.2f m %6.1f deg  %5.1f ms  %-9s "
+        "%s\n",
+        static_cast<unsigned long long>(r.frame_sequence), t, p[0], p[1], p[2],
+        yaw_deg(r.pose.orientation), std::sqrt(d),
+        angle_deg(r.pose.orientation, r.truth_orientation), ms, run_state_name(r.state), flags);
+  } else {
+    std::printf("%6llu %7.2fs  x %8.2f y %8.2f z %6.2f  yaw %7.1f  %5.1f ms  %-9s %s\n",
+                static_cast<unsigned long long>(r.frame_sequence), t, p[0], p[1], p[2],
+                yaw_deg(r.pose.orientation), ms, run_state_name(r.state), flags);
+  }
+}
+
+void Runtime::publish_loop() {
+  PoseRecord r;
+  for (;;) {
+    publish_beat_.store(monotonic_ns(), std::memory_order_release);
+    if (!ring_->pop(&r)) {
+      if (inference_done_.load(std::memory_order_acquire) && ring_->size() == 0) break;
+      if (stop_.load(std::memory_order_acquire) && ring_->size() == 0) break;
+      const timespec ts{0, 1000000};  // 1 ms: publishing tolerates this much added latency
+      nanosleep(&ts, nullptr);
+      continue;
+    }
+    const int64_t now = monotonic_ns();
+    if (config_.output.console) print_pose(r);
+    if (timing_count_ < timings_.size()) {
+      timings_[timing_count_++] = {r.capture_ns, r.inference_start_ns, r.inference_end_ns, now};
+    }
+    if (r.has_truth && pos_errors_.size() < pos_errors_.capacity()) {
+      double d = 0;
+      for (int k = 0; k < 3; ++k) {
+        d +=
+            (r.pose.position[k] - r.truth_position[k]) * (r.pose.position[k] - r.truth_position[k]);
+      }
+      pos_errors_.push_back(float(std::sqrt(d)));
+      rot_errors_.push_back(float(angle_deg(r.pose.orientation, r.truth_orientation)));
+    }
+  }
+}
+
+void Runtime::print_summary() {
+  std::vector<double> infer, e2e;
+  for (size_t i = 0; i < timing_count_; ++i) {
+    infer.push_back(double(timings_[i].inference_end_ns - timings_[i].inference_start_ns) * 1e-6);
+    e2e.push_back(double(timings_[i].publish_ns - timings_[i].capture_ns) * 1e-6);
+  }
+  std::printf(
+      "\nsummary: %llu frames captured, %llu skipped, %llu dropped as stale by the slot; "
+      "%llu poses (%llu flagged), %llu deadline misses\n",
+      static_cast<unsigned long long>(stats_.frames_captured),
+      static_cast<unsigned long long>(stats_.frames_skipped),
+      static_cast<unsigned long long>(stats_.frames_dropped),
+      static_cast<unsigned long long>(stats_.poses),
+      static_cast<unsigned long long>(stats_.poses_flagged),
+      static_cast<unsigned long long>(stats_.deadline_misses));
+  if (!infer.empty()) {
+    std::printf(
+        "latency: inference median %.1f ms p99 %.1f ms max %.1f ms; capture to publish "
+        "median %.1f ms p99 %.1f ms max %.1f ms (%s kernels, %d threads)\n",
+        percentile(infer, 0.5), percentile(infer, 0.99), percentile(infer, 1.0),
+        percentile(e2e, 0.5), percentile(e2e, 0.99), percentile(e2e, 1.0), engine_->isa(),
+        engine_->threads());
+  }
+  if (!pos_errors_.empty()) {
+    double ps = 0, rs = 0;
+    for (float v : pos_errors_) ps += v;
+    for (float v : rot_errors_) rs += v;
+    std::printf(
+        "errors against ground truth: position median %.2f m, mean %.2f m, p90 %.2f m; "
+        "orientation median %.2f deg, mean %.2f deg, p90 %.2f deg\n",
+        percentile(pos_errors_, 0.5), ps / double(pos_errors_.size()), percentile(pos_errors_, 0.9),
+        percentile(rot_errors_, 0.5), rs / double(rot_errors_.size()),
+        percentile(rot_errors_, 0.9));
+  }
+}
+
+int Runtime::run() {
+  if (config_.threads.lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+    std::fprintf(stderr, "aprt run: warning: mlockall failed (%s); memory may be paged\n",
+                 std::strerror(errno));
+  }
+  started_ns_ = monotonic_ns();
+  capture_beat_ = inference_beat_ = publish_beat_ = started_ns_;
+  Status s;
+  if (!(s = start_thread(&publish_, publish_main, config_.threads.publish, "aprt-publish")) ||
+      !(threads_started_[2] = true) ||
+      !(s = start_thread(&inference_, inference_main, config_.threads.inference, "aprt-infer")) ||
+      !(threads_started_[1] = true) ||
+      !(s = start_thread(&capture_, capture_main, config_.threads.capture, "aprt-capture")) ||
+      !(threads_started_[0] = true)) {
+    std::fprintf(stderr, "aprt run: %s\n", s.error().message());
+    request_stop();
+    return 1;
+  }
+  if (config_.supervisor.systemd) sd_notify_text("READY=1\nSTATUS=STARTING");
+  const int64_t period = int64_t(1e9 / config_.supervisor.rate_hz);
+  RunState last = RunState::kStarting;
+  int code = 0;
+  int64_t next = monotonic_ns();
+  while (!stop_.load(std::memory_order_acquire)) {
+    next += period;
+    const timespec ts{time_t(next / 1000000000), long(next % 1000000000)};
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    Health h;
+    h.now_ns = monotonic_ns();
+    h.started_ns = started_ns_;
+    h.last_frame_ns = last_frame_ns_.load(std::memory_order_acquire);
+    const bool capture_done = capture_done_.load(std::memory_order_acquire);
+    const bool inference_done = inference_done_.load(std::memory_order_acquire);
+    h.capture_beat_ns = capture_done ? h.now_ns : capture_beat_.load(std::memory_order_acquire);
+    h.inference_beat_ns =
+        inference_done ? h.now_ns : inference_beat_.load(std::memory_order_acquire);
+    h.publish_beat_ns = publish_beat_.load(std::memory_order_acquire);
+    h.poses = poses_.load(std::memory_order_acquire);
+    h.last_flags = last_flags_.load(std::memory_order_acquire);
+    h.source_failed = source_failed_.load(std::memory_order_acquire);
+    h.end_of_stream = capture_done && inference_done && ring_->size() == 0;
+    if (capture_done && h.last_frame_ns)
+      h.last_frame_ns = h.now_ns;  // a finished replay is not stale
+    const RunState st = supervisor_.step(h);
+    state_.store(uint8_t(st), std::memory_order_relaxed);
+    if (st != last) {
+      char msg[192];
+      std::snprintf(msg, sizeof msg, "STATUS=%s: %s", run_state_name(st), supervisor_.reason());
+      if (config_.supervisor.systemd) sd_notify_text(msg);
+      if (st != RunState::kRunning || last != RunState::kStarting) {
+        std::fprintf(stderr, "aprt run: state %s (%s)\n", run_state_name(st), supervisor_.reason());
+      }
+      last = st;
+    }
+    if (st != RunState::kFault && supervisor_.stages_alive(h)) {
+      if (watchdog_fd_ >= 0) ioctl(watchdog_fd_, WDIOC_KEEPALIVE, 0);
+      if (config_.supervisor.systemd) sd_notify_text("WATCHDOG=1");
+    }
+    if (st == RunState::kStopping) break;
+    if (st == RunState::kFault) {
+      code = 3;
+      break;
+    }
+  }
+  request_stop();
+  pthread_t* ts[3] = {&capture_, &inference_, &publish_};
+  for (int i = 0; i < 3; ++i) {
+    if (threads_started_[i]) pthread_join(*ts[i], nullptr);
+    threads_started_[i] = false;
+  }
+  if (config_.supervisor.systemd) sd_notify_text("STOPPING=1");
+  if (watchdog_fd_ >= 0 && code == 0) {
+    if (write(watchdog_fd_, "V", 1) != 1) {  // magic close: a clean stop does not reset the ECU
+      std::fprintf(stderr, "aprt run: warning: watchdog magic close failed\n");
+    }
+  }
+  stats_.frames_captured = frames_captured_.load();
+  stats_.frames_skipped = frames_skipped_.load();
+  stats_.frames_dropped = slot_->dropped();
+  stats_.poses = poses_.load();
+  stats_.poses_flagged = poses_flagged_.load();
+  stats_.deadline_misses = deadline_misses_.load();
+  stats_.ring_full = ring_full_.load();
+  if (config_.output.summary) print_summary();
+  return code;
+}
+
+}  // namespace aprt

@@ -1,0 +1,104 @@
+// The supervised real-time loop that `aprt run` is:
+//
+//   capture thread    source.next() -> FrameSlot (latest frame, drops stale)
+//   inference thread  FrameSlot -> preprocess -> Engine::run -> decode_pose
+//                     -> sanity flags -> PoseRecord ring
+//   publish thread    PoseRecord ring -> outputs (console; DDS and CAN plug in here)
+//   supervisor        the calling thread: health at a fixed rate, state,
+//                     watchdog and systemd notifications, shutdown
+//
+// Everything is created by create(); after it, the capture -> publish path
+// allocates nothing (the replay's image decoding aside, see drivers/replay),
+// waits only with timeouts, and shares no lock with any other thread.
+#pragma once
+
+#include <pthread.h>
+
+#include <atomic>
+#include <memory>
+#include <vector>
+
+#include "drivers/frame/frame_slot.h"
+#include "drivers/frame/frame_source.h"
+#include "kernels/common/preprocess_image.h"
+#include "runtime/config/config.h"
+#include "runtime/engine/engine.h"
+#include "runtime/loop/pose_record.h"
+#include "runtime/loop/spsc_ring.h"
+#include "runtime/loop/supervisor.h"
+
+namespace aprt {
+
+// Per-frame stage timings for the exit summary and `--timing` reports.
+struct TimingRecord {
+  int64_t capture_ns, inference_start_ns, inference_end_ns, publish_ns;
+};
+
+struct RunStats {
+  uint64_t frames_captured = 0, frames_skipped = 0, frames_dropped = 0;
+  uint64_t poses = 0, poses_flagged = 0, deadline_misses = 0, ring_full = 0;
+  uint64_t source_restarts = 0;
+};
+
+class Runtime {
+ public:
+  static Expected<std::unique_ptr<Runtime>> create(const Config& config);
+  ~Runtime();
+
+  // Runs until the replay ends, request_stop(), or FAULT. Returns the exit
+  // code: 0 clean end or stop, 3 FAULT.
+  int run();
+  // Async-signal-safe.
+  void request_stop() { stop_.store(true, std::memory_order_release); }
+
+  const RunStats& stats() const { return stats_; }
+  const Engine& engine() const { return *engine_; }
+  // Timing of every published pose, in order (capacity fixed at create()).
+  const TimingRecord* timings(size_t* count) const {
+    *count = timing_count_;
+    return timings_.data();
+  }
+
+ private:
+  Runtime() = default;
+  static void* capture_main(void* self);
+  static void* inference_main(void* self);
+  static void* publish_main(void* self);
+  void capture_loop();
+  void inference_loop();
+  void publish_loop();
+  void print_pose(const PoseRecord& r);
+  void print_summary();
+  Status start_thread(pthread_t* t, void* (*fn)(void*), const ThreadConfig& tc, const char* name);
+
+  Config config_;
+  std::unique_ptr<Engine> engine_;
+  std::unique_ptr<FrameSource> source_;
+  std::unique_ptr<FrameSlot> slot_;
+  std::unique_ptr<kernels::PreprocessPlan> plan_;
+  std::unique_ptr<SpscRing<PoseRecord, 64>> ring_;
+  Supervisor supervisor_{Config::Supervisor{}};
+
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> capture_done_{false};
+  std::atomic<bool> inference_done_{false};
+  std::atomic<bool> source_failed_{false};
+  std::atomic<int64_t> capture_beat_{0}, inference_beat_{0}, publish_beat_{0};
+  std::atomic<int64_t> last_frame_ns_{0};
+  std::atomic<uint64_t> poses_{0};
+  std::atomic<uint32_t> last_flags_{0};
+  std::atomic<uint8_t> state_{uint8_t(RunState::kStarting)};
+  std::atomic<uint64_t> frames_captured_{0}, frames_skipped_{0}, ring_full_{0};
+  std::atomic<uint64_t> poses_flagged_{0}, deadline_misses_{0};
+
+  pthread_t capture_{}, inference_{}, publish_{};
+  bool threads_started_[3] = {};
+  int64_t started_ns_ = 0;
+  std::vector<TimingRecord> timings_;
+  size_t timing_count_ = 0;
+  std::vector<float> pos_errors_, rot_errors_;  // with ground truth
+  RunStats stats_;
+  int watchdog_fd_ = -1;
+};
+
+}  // namespace aprt

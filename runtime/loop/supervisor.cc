@@ -1,0 +1,67 @@
+#include "runtime/loop/supervisor.h"
+
+namespace aprt {
+
+const char* run_state_name(RunState s) {
+  switch (s) {
+    case RunState::kStarting: return "STARTING";
+    case RunState::kRunning: return "RUNNING";
+    case RunState::kDegraded: return "DEGRADED";
+    case RunState::kFault: return "FAULT";
+    case RunState::kStopping: return "STOPPING";
+  }
+  return "?";
+}
+
+void Supervisor::set(RunState s, const char* why) noexcept {
+  state_ = s;
+  reason_ = why;
+}
+
+bool Supervisor::stages_alive(const Health& h) const noexcept {
+  // A stage that has not beaten for two frame timeouts is hung.
+  const int64_t limit = int64_t(2.0 * cfg_.frame_timeout_ms * 1e6);
+  return h.now_ns - h.capture_beat_ns < limit && h.now_ns - h.inference_beat_ns < limit &&
+         h.now_ns - h.publish_beat_ns < limit;
+}
+
+RunState Supervisor::step(const Health& h) noexcept {
+  if (state_ == RunState::kFault || state_ == RunState::kStopping) return state_;
+  if (h.end_of_stream) {
+    set(RunState::kStopping, "end of the replayed sequence");
+    return state_;
+  }
+  if (!stages_alive(h)) {
+    set(RunState::kFault, "a stage stopped beating (hung thread)");
+    return state_;
+  }
+  const int64_t timeout = int64_t(cfg_.frame_timeout_ms * 1e6);
+  const char* problem = nullptr;
+  if (h.source_failed) {
+    problem = "camera source failed (restarting)";
+  } else if (h.last_frame_ns == 0) {
+    if (h.now_ns - h.started_ns > timeout) problem = "no frame received yet";
+  } else if (h.now_ns - h.last_frame_ns > timeout) {
+    problem = "frames stale (camera stalled?)";
+  } else if (h.last_flags & kPoseDeadlineMissed) {
+    problem = "inference deadline missed";
+  } else if (h.last_flags & (kPoseNonFinite | kPoseQuatDegenerate | kPoseQuatNorm)) {
+    problem = "network output not sane";
+  } else if (h.last_flags & (kPoseOutOfBounds | kPoseJump)) {
+    problem = "pose implausible (outside the map or a jump)";
+  } else if (h.last_flags & kPoseStaleFrame) {
+    problem = "frames arrive late";
+  }
+  if (problem) {
+    if (state_ != RunState::kDegraded) degraded_since_ns_ = h.now_ns;
+    set(RunState::kDegraded, problem);
+    if (h.now_ns - degraded_since_ns_ > int64_t(cfg_.fault_after_s * 1e9)) {
+      set(RunState::kFault, problem);
+    }
+  } else if (h.poses > 0) {
+    set(RunState::kRunning, "ok");
+  }
+  return state_;
+}
+
+}  // namespace aprt

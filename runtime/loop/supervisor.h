@@ -1,0 +1,44 @@
+// The supervisor's decisions (DESIGN.md section 8): states STARTING ->
+// RUNNING <-> DEGRADED -> FAULT from heartbeats, frame age, inference time
+// and output sanity, evaluated at a fixed rate. Pure logic, so tests can
+// drive it with made-up health snapshots; runtime.cc feeds it.
+#pragma once
+
+#include <cstdint>
+
+#include "runtime/config/config.h"
+#include "runtime/loop/pose_record.h"
+
+namespace aprt {
+
+struct Health {
+  int64_t now_ns = 0;
+  int64_t started_ns = 0;
+  int64_t last_frame_ns = 0;  // arrival (monotonic) of the newest frame inference took; 0 = none
+  int64_t capture_beat_ns = 0, inference_beat_ns = 0, publish_beat_ns = 0;
+  uint64_t poses = 0;
+  uint32_t last_flags = 0;  // flags of the newest pose
+  bool source_failed = false;
+  bool end_of_stream = false;
+};
+
+class Supervisor {
+ public:
+  explicit Supervisor(const Config::Supervisor& cfg) : cfg_(cfg) {}
+
+  // @rt: no allocation; updates and returns the state.
+  RunState step(const Health& h) noexcept;
+  RunState state() const { return state_; }
+  const char* reason() const { return reason_; }
+  // True when every stage beat recently: only then is the watchdog petted.
+  bool stages_alive(const Health& h) const noexcept;
+
+ private:
+  void set(RunState s, const char* why) noexcept;
+  Config::Supervisor cfg_;
+  RunState state_ = RunState::kStarting;
+  const char* reason_ = "starting";
+  int64_t degraded_since_ns_ = 0;
+};
+
+}  // namespace aprt

@@ -1,0 +1,72 @@
+#include "runtime/config/config.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+namespace aprt {
+namespace {
+
+void expect_refused(const char* yaml, const char* fragment) {
+  auto c = parse_config(yaml, "test.yaml");
+  ASSERT_FALSE(c) << "accepted:\n" << yaml;
+  EXPECT_NE(std::strstr(c.error().message(), fragment), nullptr) << c.error().message();
+}
+
+TEST(Config, ParsesAFullFile) {
+  auto c = parse_config(R"(
+model: m.aprt
+engine: {threads: 2, isa: avx2, cpus: [0, 1]}
+source:
+  type: replay
+  replay: {path: /data/drive, rate_hz: 0, loop: true}
+output: {console: false}
+supervisor: {rate_hz: 100, frame_timeout_ms: 250, watchdog_device: /dev/watchdog}
+sanity: {max_jump_m: 5}
+threads:
+  inference: {priority: 50, cpu: 1}
+  lock_memory: true
+)",
+                        "test.yaml");
+  ASSERT_TRUE(c) << c.error().message();
+  EXPECT_EQ(c->model, "m.aprt");
+  EXPECT_EQ(c->engine.threads, 2);
+  EXPECT_EQ(c->engine.isa, "avx2");
+  EXPECT_EQ(c->engine.cpus.size(), 2u);
+  EXPECT_EQ(c->source.replay.rate_hz, 0.0);
+  EXPECT_TRUE(c->source.replay.loop);
+  EXPECT_FALSE(c->output.console);
+  EXPECT_EQ(c->supervisor.frame_timeout_ms, 250.0);
+  EXPECT_EQ(c->supervisor.watchdog_device, "/dev/watchdog");
+  EXPECT_EQ(c->threads.inference.priority, 50);
+  EXPECT_EQ(c->threads.inference.cpu, 1);
+}
+
+TEST(Config, RecordedRate) {
+  auto c = parse_config("model: m\nsource: {replay: {path: d, rate_hz: recorded}}\n", "t");
+  ASSERT_TRUE(c) << c.error().message();
+  EXPECT_TRUE(c->source.replay.recorded);
+}
+
+TEST(Config, RefusesWithKeyPathAndLine) {
+  expect_refused("model: m\nsource:\n  replay:\n    path: d\n    rate_hz: fast\n",
+                 "test.yaml:5: source.replay.rate_hz: expected a number in [0, 1000], got 'fast'");
+  expect_refused("model: m\nsource: {replay: {path: d}}\nengine:\n  thread: 2\n",
+                 "test.yaml:4: engine.thread: unknown key");
+  expect_refused("model: m\nsource: {replay: {path: d}}\nengine: {threads: 99}\n",
+                 "engine.threads: expected an integer in [1, 16], got '99'");
+  expect_refused("model: m\nsource: {replay: {path: d}}\nengine: {isa: sse}\n",
+                 "engine.isa: 'sse' is not one of");
+  expect_refused("model: m\nsource: {replay: {path: d}}\noutput: {console: yes please}\n",
+                 "output.console: expected true or false");
+  expect_refused("model: m\nsource: {replay: {path: d}}\nthreads: {inference: {priority: 120}}\n",
+                 "threads.inference.priority");
+  expect_refused("model: m\nmodel: n\n", "key 'model' appears twice");
+  expect_refused("source: {replay: {path: d}}\n", "'model'");
+  expect_refused("model: m\n", "source.replay.path is required");
+  expect_refused("model: [unclosed\n", "YAML syntax error");
+  expect_refused("- a\n- b\n", "must be a mapping");
+}
+
+}  // namespace
+}  // namespace aprt

@@ -1,0 +1,87 @@
+#include "runtime/loop/supervisor.h"
+
+#include <gtest/gtest.h>
+
+namespace aprt {
+namespace {
+
+constexpr int64_t kMs = 1000000;
+
+Health healthy(int64_t now) {
+  Health h;
+  h.now_ns = now;
+  h.started_ns = 0;
+  h.last_frame_ns = now - 10 * kMs;
+  h.capture_beat_ns = h.inference_beat_ns = h.publish_beat_ns = now - kMs;
+  h.poses = 1;
+  return h;
+}
+
+Config::Supervisor cfg() {
+  Config::Supervisor c;
+  c.frame_timeout_ms = 500;
+  c.fault_after_s = 2;
+  return c;
+}
+
+TEST(Supervisor, StartsThenRuns) {
+  Supervisor s(cfg());
+  Health h = healthy(100 * kMs);
+  h.poses = 0;
+  h.last_frame_ns = 0;
+  EXPECT_EQ(s.step(h), RunState::kStarting);
+  h.poses = 1;
+  h.last_frame_ns = 90 * kMs;
+  EXPECT_EQ(s.step(h), RunState::kRunning);
+}
+
+TEST(Supervisor, StaleFramesDegradeThenRecover) {
+  Supervisor s(cfg());
+  EXPECT_EQ(s.step(healthy(kMs * 1000)), RunState::kRunning);
+  Health h = healthy(kMs * 2000);
+  h.last_frame_ns = kMs * 1000;  // 1 s old
+  EXPECT_EQ(s.step(h), RunState::kDegraded);
+  EXPECT_STREQ(s.reason(), "frames stale (camera stalled?)");
+  EXPECT_EQ(s.step(healthy(kMs * 2100)), RunState::kRunning);
+}
+
+TEST(Supervisor, FlaggedPosesDegrade) {
+  Supervisor s(cfg());
+  Health h = healthy(kMs * 1000);
+  h.last_flags = kPoseNonFinite;
+  EXPECT_EQ(s.step(h), RunState::kDegraded);
+  h.last_flags = kPoseDeadlineMissed;
+  EXPECT_EQ(s.step(h), RunState::kDegraded);
+  EXPECT_STREQ(s.reason(), "inference deadline missed");
+  h.last_flags = kPoseJump;
+  EXPECT_EQ(s.step(h), RunState::kDegraded);
+}
+
+TEST(Supervisor, LongDegradationBecomesFault) {
+  Supervisor s(cfg());
+  Health h = healthy(kMs * 1000);
+  h.last_flags = kPoseOutOfBounds;
+  EXPECT_EQ(s.step(h), RunState::kDegraded);
+  h = healthy(kMs * 4000);
+  h.last_flags = kPoseOutOfBounds;
+  EXPECT_EQ(s.step(h), RunState::kFault);
+  EXPECT_EQ(s.step(healthy(kMs * 5000)), RunState::kFault);  // terminal
+}
+
+TEST(Supervisor, HungStageIsFaultAndStopsThePetting) {
+  Supervisor s(cfg());
+  Health h = healthy(kMs * 5000);
+  h.inference_beat_ns = kMs * 3000;  // 2 s without a beat: hung
+  EXPECT_FALSE(s.stages_alive(h));
+  EXPECT_EQ(s.step(h), RunState::kFault);
+}
+
+TEST(Supervisor, EndOfStreamStops) {
+  Supervisor s(cfg());
+  Health h = healthy(kMs * 1000);
+  h.end_of_stream = true;
+  EXPECT_EQ(s.step(h), RunState::kStopping);
+}
+
+}  // namespace
+}  // namespace aprt

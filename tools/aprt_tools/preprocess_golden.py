@@ -1,0 +1,68 @@
+"""Frames in every supported pixel format and what the training transform makes of
+them, for the runtime's preprocessing tests (tests/unit/preprocess_test.cc).
+
+For each case: <case>.raw (the frame bytes), <case>.f32 (expected NHWC input
+tensor), and a line in cases.txt: "case format width height stride size".
+YUV frames are converted to RGB with the integer BT.601 formula of
+kernels/common/image_types.h before the transform, exactly as the runtime does.
+Also writes rgb.png, whose expected tensor is png.f32 (decoder + transform).
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+from PIL import Image
+
+from .preprocess import prepare
+
+
+def yuv_to_rgb(y, u, v):
+    c, d, e = y.astype(np.int32) - 16, u.astype(np.int32) - 128, v.astype(np.int32) - 128
+    r = (298 * c + 409 * e + 128) >> 8
+    g = (298 * c - 100 * d - 208 * e + 128) >> 8
+    b = (298 * c + 516 * d + 128) >> 8
+    return np.clip(np.stack([r, g, b], -1), 0, 255).astype(np.uint8)
+
+
+def write_cases(out: str, seed: int = 3):
+    os.makedirs(out, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    lines = []
+
+    def emit(name, fmt, raw, rgb, w, h, stride, size):
+        raw.astype(np.uint8).tofile(os.path.join(out, name + ".raw"))
+        t = prepare(rgb, size).permute(1, 2, 0).contiguous().numpy().astype("<f4")
+        t.tofile(os.path.join(out, name + ".f32"))
+        lines.append(f"{name} {fmt} {w} {h} {stride} {size}")
+
+    for (w, h, size) in ((64, 48, 32), (50, 75, 37), (40, 40, 40), (33, 21, 64)):
+        rgb = rng.integers(0, 256, (h, w, 3), dtype=np.uint8)
+        emit(f"rgb_{w}x{h}_{size}", "RGB24", rgb, rgb, w, h, w * 3, size)
+        emit(f"bgr_{w}x{h}_{size}", "BGR24", rgb[:, :, ::-1], rgb, w, h, w * 3, size)
+        gray = rng.integers(0, 256, (h, w), dtype=np.uint8)
+        emit(f"gray_{w}x{h}_{size}", "GRAY8", gray, np.repeat(gray[:, :, None], 3, 2), w, h, w, size)
+        if w % 2 == 0:
+            y = rng.integers(16, 236, (h, w), dtype=np.uint8)
+            u = rng.integers(16, 241, (h, w // 2), dtype=np.uint8)
+            v = rng.integers(16, 241, (h, w // 2), dtype=np.uint8)
+            rgb_yuv = yuv_to_rgb(y, np.repeat(u, 2, 1), np.repeat(v, 2, 1))
+            yuyv = np.stack([y[:, 0::2], u, y[:, 1::2], v], -1).reshape(h, w * 2)
+            uyvy = np.stack([u, y[:, 0::2], v, y[:, 1::2]], -1).reshape(h, w * 2)
+            emit(f"yuyv_{w}x{h}_{size}", "YUYV", yuyv, rgb_yuv, w, h, w * 2, size)
+            emit(f"uyvy_{w}x{h}_{size}", "UYVY", uyvy, rgb_yuv, w, h, w * 2, size)
+            if h % 2 == 0:
+                u2 = rng.integers(16, 241, (h // 2, w // 2), dtype=np.uint8)
+                v2 = rng.integers(16, 241, (h // 2, w // 2), dtype=np.uint8)
+                up = lambda p: np.repeat(np.repeat(p, 2, 0), 2, 1)
+                rgb12 = yuv_to_rgb(y, up(u2), up(v2))
+                uv = np.stack([u2, v2], -1).reshape(h // 2, w)
+                emit(f"nv12_{w}x{h}_{size}", "NV12", np.concatenate([y, uv], 0), rgb12, w, h, w, size)
+    with open(os.path.join(out, "cases.txt"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    rgb = rng.integers(0, 256, (30, 52, 3), dtype=np.uint8)
+    Image.fromarray(rgb).save(os.path.join(out, "rgb.png"))
+    prepare(rgb, 24).permute(1, 2, 0).contiguous().numpy().astype("<f4").tofile(
+        os.path.join(out, "png.f32"))
+    return len(lines)

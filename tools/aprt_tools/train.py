@@ -1,0 +1,161 @@
+"""Training of the reference APR-Transformer on a labelled sequence (CPU).
+
+The paper's loss (Kendall et al.'s learned weighting): L = L_p exp(-s_x) + s_x
++ L_q exp(-s_q) + s_q, with L1 position error on min-max normalised positions
+and a sign-invariant L1 quaternion error (q and -q are one rotation); Adam.
+Colour augmentation (brightness, contrast, per-channel gain, gamma, haze,
+noise) stands in for the lighting the training sequence does not show. A
+contiguous tenth of the route is held out for the validation error that the
+model file records; the test sequence is never looked at here.
+
+  python3 -m aprt_tools train --data DIR --out DIR [--size 128] [--minutes 90] ...
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+
+import numpy as np
+import torch
+from torch import nn
+from torch.nn import functional as F
+
+from .dataset import load_image, orientation_error_deg, read_poses
+from .model.apr_transformer import AprConfig, AprTransformer
+from .preprocess import crop_resize, normalise
+
+
+class PoseLoss(nn.Module):
+    def __init__(self, s_x: float = 0.0, s_q: float = -3.0):
+        super().__init__()
+        self.s_x = nn.Parameter(torch.tensor(s_x))
+        self.s_q = nn.Parameter(torch.tensor(s_q))
+
+    def forward(self, pred, pos_gt, q_gt):
+        l_p = (pred[:, :3] - pos_gt).abs().sum(dim=1).mean()
+        q = F.normalize(pred[:, 3:], dim=1)
+        l_q = torch.minimum((q - q_gt).abs().sum(dim=1), (q + q_gt).abs().sum(dim=1)).mean()
+        loss = l_p * torch.exp(-self.s_x) + self.s_x + l_q * torch.exp(-self.s_q) + self.s_q
+        return loss, l_p.detach(), l_q.detach()
+
+
+def load_sequence(folder: str, size: int):
+    poses = read_poses(folder)
+    imgs = torch.empty((len(poses), 3, size, size), dtype=torch.uint8)
+    for i, (name, _, _) in enumerate(poses):
+        imgs[i] = (crop_resize(load_image(folder, name), size) * 255.0 + 0.5).clamp(0, 255).to(torch.uint8)
+    pos = torch.tensor(np.stack([p for _, p, _ in poses]), dtype=torch.float32)
+    quat = torch.tensor(np.stack([q / np.linalg.norm(q) for _, _, q in poses]), dtype=torch.float32)
+    return imgs, pos, quat
+
+
+def augment(x: torch.Tensor, gen: torch.Generator) -> torch.Tensor:
+    """x: (N, 3, S, S) in [0, 1]; lighting and sensor changes, never geometry."""
+    n = x.shape[0]
+    r = lambda *shape: torch.rand(*shape, generator=gen)
+    gain = 0.75 + 0.5 * r(n, 3, 1, 1)
+    bright = 0.5 + 0.8 * r(n, 1, 1, 1)
+    x = x * gain * bright
+    mean = x.mean(dim=(1, 2, 3), keepdim=True)
+    x = (x - mean) * (0.6 + 0.8 * r(n, 1, 1, 1)) + mean
+    haze = 0.35 * r(n, 1, 1, 1)
+    haze_color = 0.4 + 0.5 * r(n, 3, 1, 1)
+    x = x * (1 - haze) + haze_color * haze
+    x = x.clamp(0, 1) ** (0.8 + 0.45 * r(n, 1, 1, 1))
+    x = x + 0.02 * torch.randn(x.shape, generator=gen)
+    return x.clamp(0, 1)
+
+
+def split_holdout(n: int, fraction: float = 0.1):
+    """Train / validation indices: a contiguous stretch of the route is held out."""
+    k = max(1, int(n * fraction))
+    start = (n - k) // 2
+    val = np.arange(start, start + k)
+    train = np.concatenate([np.arange(0, max(0, start - 5)), np.arange(start + k + 5, n)])
+    return train, val
+
+
+@torch.no_grad()
+def evaluate(model, imgs, pos, quat, lo, hi, batch=32):
+    model.eval()
+    pe, oe = [], []
+    for i in range(0, len(imgs), batch):
+        x = normalise(imgs[i:i + batch].float() / 255.0)
+        y = model(x)
+        p = y[:, :3] * (hi - lo) + lo
+        for k in range(len(p)):
+            pe.append(float(torch.norm(p[k] - pos[i + k])))
+            oe.append(orientation_error_deg(y[k, 3:].numpy(), quat[i + k].numpy()))
+    model.train()
+    return np.array(pe), np.array(oe)
+
+
+def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: int = 16,
+          lr: float = 1e-4, seed: int = 1, threads: int = 2, hidden: int = 128, layers: int = 3,
+          log=print):
+    torch.manual_seed(seed)
+    torch.set_num_threads(threads)
+    os.makedirs(out, exist_ok=True)
+    t0 = time.time()
+    imgs, pos, quat = load_sequence(data, size)
+    log(f"train: {len(imgs)} frames from {data} loaded in {time.time() - t0:.0f} s")
+    tr, va = split_holdout(len(imgs))
+    lo = pos[tr].min(dim=0).values
+    hi = pos[tr].max(dim=0).values
+    hi = torch.maximum(hi, lo + 1.0)  # a flat axis (camera height) still gets a unit range
+    cfg = AprConfig.named("full", size)
+    cfg.hidden_dim, cfg.dim_feedforward = hidden, 2 * hidden
+    cfg.enc_layers = cfg.dec_layers = layers
+    cfg.dropout = 0.1
+    cfg.pose_min, cfg.pose_max = tuple(lo.tolist()), tuple(hi.tolist())
+    model = AprTransformer(cfg)
+    loss_fn = PoseLoss()
+    opt = torch.optim.AdamW(list(model.parameters()) + list(loss_fn.parameters()), lr=lr,
+                            weight_decay=1e-4)
+    gen = torch.Generator().manual_seed(seed)
+    pos_n = (pos - lo) / (hi - lo)
+    budget = minutes * 60.0
+    start = time.time()
+    step, epoch = 0, 0
+    log_rows = []
+    while time.time() - start < budget:
+        epoch += 1
+        perm = torch.from_numpy(tr[torch.randperm(len(tr), generator=gen).numpy()])
+        for b in range(0, len(perm) - batch + 1, batch):
+            frac = (time.time() - start) / budget
+            if frac >= 1.0:
+                break
+            for g in opt.param_groups:  # constant, then cosine decay over the last half
+                g["lr"] = lr * (1.0 if frac < 0.5 else 0.5 * (1 + math.cos(math.pi * (frac - 0.5) / 0.5)))
+            idx = perm[b:b + batch]
+            x = normalise(augment(imgs[idx].float() / 255.0, gen))
+            loss, lp, lq = loss_fn(model(x), pos_n[idx], quat[idx])
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            step += 1
+            if step % 50 == 0:
+                log(f"train: epoch {epoch} step {step} loss {loss.item():.3f} pos {lp.item():.4f} "
+                    f"quat {lq.item():.4f} s_x {loss_fn.s_x.item():.2f} s_q {loss_fn.s_q.item():.2f} "
+                    f"{(time.time() - start) / 60:.1f} min")
+        pe, oe = evaluate(model, imgs[va], pos[va], quat[va], lo, hi)
+        row = dict(epoch=epoch, step=step, minutes=(time.time() - start) / 60,
+                   val_pos_median=float(np.median(pe)), val_rot_median=float(np.median(oe)))
+        log_rows.append(row)
+        log(f"train: epoch {epoch} done: validation median {row['val_pos_median']:.2f} m, "
+            f"{row['val_rot_median']:.2f} deg")
+        torch.save({"model_state_dict": model.state_dict(), "config": json.loads(cfg.to_json()),
+                    "s_x": loss_fn.s_x.item(), "s_q": loss_fn.s_q.item()},
+                   os.path.join(out, "checkpoint.pth"))
+    cfg.dropout = 0.0
+    cfg.extra = dict(val_error=[log_rows[-1]["val_pos_median"], log_rows[-1]["val_rot_median"]],
+                     train_minutes=(time.time() - start) / 60, train_frames=int(len(tr)),
+                     epochs=epoch, steps=step, data=os.path.abspath(data))
+    with open(os.path.join(out, "model.json"), "w") as f:
+        f.write(cfg.to_json())
+    with open(os.path.join(out, "train_log.json"), "w") as f:
+        json.dump(log_rows, f, indent=1)
+    return model, cfg
