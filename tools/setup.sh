@@ -10,8 +10,14 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   # tests, sanitizers, fuzzing, formatting
   libgtest-dev libgmock-dev libbenchmark-dev clang clang-format libclang-rt-14-dev
-  # Python tools (Debian's interpreter at /usr/bin/python3)
-  python3 python3-numpy python3-torch python3-onnx python3-matplotlib
+  # runtime libraries: YAML configuration, PNG/JPEG replay, pose geometry, DDS
+  libyaml-dev libpng-dev libjpeg-dev libeigen3-dev cyclonedds-dev cyclonedds-tools
+  # CAN tools (cansend/candump, for the HIL rig and by hand)
+  can-utils
+  # Python tools (Debian's interpreter at /usr/bin/python3); canmatrix is the
+  # independent DBC parser of the tests
+  python3 python3-numpy python3-torch python3-onnx python3-matplotlib python3-pil
+  python3-canmatrix
   # torch links libblas.so.3: OpenBLAS instead of the 10x slower reference BLAS
   libopenblas0-pthread
   # aarch64 cross build, its tests under user-mode emulation

@@ -28,6 +28,7 @@ const char* errc_name(Errc code) noexcept {
     case Errc::kInvalidArgument: return "invalid_argument";
     case Errc::kUnsupported: return "unsupported";
     case Errc::kNotReady: return "not_ready";
+    case Errc::kNotFound: return "not_found";
   }
   return "unknown";
 }

@@ -33,6 +33,7 @@ enum class Errc : uint16_t {
   kInvalidArgument,
   kUnsupported,
   kNotReady,
+  kNotFound,  // a device or interface that does not exist (yet)
 };
 
 const char* errc_name(Errc code) noexcept;

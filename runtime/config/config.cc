@@ -101,6 +101,50 @@ class Reader {
     return ok();
   }
 
+  // Decimal or 0x-prefixed hexadecimal (CAN identifiers).
+  Status id(const Node* m, const std::string& path, const char* key, long lo, long hi, int* out) {
+    const Node* n = m ? m->get(key) : nullptr;
+    if (!n || n->kind == Node::kNull) return ok();
+    const std::string p = join(path, key);
+    const bool hex = n->kind == Node::kScalar && n->scalar.rfind("0x", 0) == 0;
+    char* end = nullptr;
+    errno = 0;
+    const long v =
+        n->kind == Node::kScalar ? std::strtol(n->scalar.c_str(), &end, hex ? 16 : 10) : 0;
+    if (n->kind != Node::kScalar || n->quoted || !end || *end || errno || v < lo || v > hi ||
+        n->scalar.empty()) {
+      char range[112];
+      std::snprintf(range, sizeof range, "expected an identifier in [0x%lx, 0x%lx], got '%s'", lo,
+                    hi, n->kind == Node::kScalar ? n->scalar.c_str() : "(not a scalar)");
+      return fail(n, p, range);
+    }
+    *out = int(v);
+    return ok();
+  }
+
+  Status vec3(const Node* m, const std::string& path, const char* key, double lo, double hi,
+              double out[3]) {
+    const Node* n = m ? m->get(key) : nullptr;
+    if (!n || n->kind == Node::kNull) return ok();
+    const std::string p = join(path, key);
+    if (n->kind != Node::kSeq || n->seq.size() != 3)
+      return fail(n, p, "expected a list of 3 numbers");
+    for (int i = 0; i < 3; ++i) {
+      const Node* e = n->seq[size_t(i)].get();
+      char* end = nullptr;
+      errno = 0;
+      const double v = e->kind == Node::kScalar ? std::strtod(e->scalar.c_str(), &end) : NAN;
+      if (e->kind != Node::kScalar || e->quoted || !end || *end || errno || !std::isfinite(v) ||
+          v < lo || v > hi) {
+        char range[96];
+        std::snprintf(range, sizeof range, "expected a number in [%g, %g]", lo, hi);
+        return fail(e, p + "[" + std::to_string(i) + "]", range);
+      }
+      out[i] = v;
+    }
+    return ok();
+  }
+
   Status boolean(const Node* m, const std::string& path, const char* key, bool* out) {
     const Node* n = m ? m->get(key) : nullptr;
     if (!n || n->kind == Node::kNull) return ok();
@@ -143,6 +187,16 @@ class Reader {
   std::string origin_;
 };
 
+Status read_transform(Reader& r, const Node* parent, const char* name, double xyz[3],
+                      double rpy[3]) {
+  const std::string path = std::string("extrinsics.") + name;
+  const Node* n = parent ? parent->get(name) : nullptr;
+  Status s;
+  if (!(s = r.map(n, path, {"xyz", "rpy_deg"}))) return s;
+  if (!(s = r.vec3(n, path, "xyz", -1e7, 1e7, xyz))) return s;
+  return r.vec3(n, path, "rpy_deg", -360, 360, rpy);
+}
+
 Status read_thread(Reader& r, const Node* root, const char* name, ThreadConfig* t) {
   const std::string path = std::string("threads.") + name;
   const Node* n = root ? root->get(name) : nullptr;
@@ -164,8 +218,9 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
   Status s;
 #define APRT_TRY(expr) \
   if (!(s = (expr))) return s.error()
-  APRT_TRY(
-      r.map(root, "", {"model", "engine", "source", "output", "supervisor", "sanity", "threads"}));
+  APRT_TRY(r.map(
+      root, "",
+      {"model", "engine", "source", "output", "extrinsics", "supervisor", "sanity", "threads"}));
   if (root && root->kind == Node::kMap) {
     APRT_TRY(r.str(root, "", "model", &c.model));
     const Node* e = root->get("engine");
@@ -197,9 +252,57 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(r.integer(v, "source.v4l2", "buffers", 2, 32, &c.source.v4l2.buffers));
 
     const Node* out = root->get("output");
-    APRT_TRY(r.map(out, "output", {"console", "summary"}));
+    APRT_TRY(r.map(out, "output",
+                   {"console", "summary", "frame_id", "sigma_position_m", "sigma_orientation_deg",
+                    "status_rate_hz", "dds", "can"}));
     APRT_TRY(r.boolean(out, "output", "console", &c.output.console));
     APRT_TRY(r.boolean(out, "output", "summary", &c.output.summary));
+    APRT_TRY(r.str(out, "output", "frame_id", &c.output.frame_id));
+    APRT_TRY(r.num(out, "output", "sigma_position_m", 0, 600, &c.output.sigma_position_m));
+    APRT_TRY(r.num(out, "output", "sigma_orientation_deg", 0, 25, &c.output.sigma_orientation_deg));
+    APRT_TRY(r.num(out, "output", "status_rate_hz", 0.1, 100, &c.output.status_rate_hz));
+    const Node* dds = out ? out->get("dds") : nullptr;
+    APRT_TRY(r.map(dds, "output.dds",
+                   {"enabled", "domain", "pose_topic", "diagnostics_topic", "reliability", "depth",
+                    "loopback_only"}));
+    APRT_TRY(r.boolean(dds, "output.dds", "enabled", &c.output.dds.enabled));
+    APRT_TRY(r.integer(dds, "output.dds", "domain", 0, 232, &c.output.dds.domain));
+    APRT_TRY(r.str(dds, "output.dds", "pose_topic", &c.output.dds.pose_topic));
+    APRT_TRY(r.str(dds, "output.dds", "diagnostics_topic", &c.output.dds.diagnostics_topic));
+    APRT_TRY(r.str(dds, "output.dds", "reliability", &c.output.dds.reliability,
+                   {"reliable", "best_effort"}));
+    APRT_TRY(r.integer(dds, "output.dds", "depth", 1, 1000, &c.output.dds.depth));
+    APRT_TRY(r.boolean(dds, "output.dds", "loopback_only", &c.output.dds.loopback_only));
+    const Node* can = out ? out->get("can") : nullptr;
+    APRT_TRY(
+        r.map(can, "output.can", {"enabled", "interface", "fd", "cycle_ms", "recover_ms", "ids"}));
+    APRT_TRY(r.boolean(can, "output.can", "enabled", &c.output.can.enabled));
+    APRT_TRY(r.str(can, "output.can", "interface", &c.output.can.interface));
+    APRT_TRY(r.boolean(can, "output.can", "fd", &c.output.can.fd));
+    APRT_TRY(r.num(can, "output.can", "cycle_ms", 0, 60000, &c.output.can.cycle_ms));
+    APRT_TRY(r.num(can, "output.can", "recover_ms", 10, 60000, &c.output.can.recover_ms));
+    const Node* ids = can ? can->get("ids") : nullptr;
+    static const char* const kIdNames[6] = {"status", "pos_xy", "pos_zqw", "quat_yz", "time", "fd"};
+    APRT_TRY(
+        r.map(ids, "output.can.ids", {"status", "pos_xy", "pos_zqw", "quat_yz", "time", "fd"}));
+    for (int i = 0; i < 6; ++i) {
+      APRT_TRY(r.id(ids, "output.can.ids", kIdNames[i], 0, 0x7FF, &c.output.can.ids[i]));
+    }
+    for (int i = 0; i < 6; ++i) {
+      for (int j = 0; j < i; ++j) {
+        if (c.output.can.ids[i] == c.output.can.ids[j]) {
+          return Error(Errc::kInvalidArgument, "%s: output.can.ids: %s and %s share id 0x%x",
+                       origin.c_str(), kIdNames[j], kIdNames[i], c.output.can.ids[i]);
+        }
+      }
+    }
+
+    const Node* ex = root->get("extrinsics");
+    APRT_TRY(r.map(ex, "extrinsics", {"sensor_to_base_link", "map_offset"}));
+    APRT_TRY(read_transform(r, ex, "sensor_to_base_link", c.extrinsics.sensor_xyz,
+                            c.extrinsics.sensor_rpy_deg));
+    APRT_TRY(read_transform(r, ex, "map_offset", c.extrinsics.map_offset_xyz,
+                            c.extrinsics.map_offset_rpy_deg));
 
     const Node* sv = root->get("supervisor");
     APRT_TRY(r.map(sv, "supervisor",

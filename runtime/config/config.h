@@ -47,7 +47,38 @@ struct Config {
   struct Output {
     bool console = true;  // a line per pose (with errors when the source has ground truth)
     bool summary = true;  // statistics at exit
+    std::string frame_id = "map";
+    // 1-sigma of the published covariance; 0: the model's measured validation error.
+    double sigma_position_m = 0.0, sigma_orientation_deg = 0.0;
+    double status_rate_hz = 1.0;  // diagnostics / status
+    struct Dds {
+      bool enabled = false;
+      int domain = 0;
+      std::string pose_topic = "/aprt/pose_with_covariance";  // ROS name ("rt" is prepended)
+      std::string diagnostics_topic = "/diagnostics";
+      std::string reliability = "reliable";  // reliable | best_effort
+      int depth = 10;
+      bool loopback_only = false;
+    } dds;
+    struct Can {
+      bool enabled = false;
+      std::string interface = "can0";
+      bool fd = false;        // one CAN FD frame instead of five classic frames
+      double cycle_ms = 0.0;  // at most one estimate per cycle; 0: every estimate
+      double recover_ms = 1000.0;
+      // status, pos_xy, pos_zqw, quat_yz, time, fd (config/aprt_pose.dbc)
+      int ids[6] = {0x300, 0x301, 0x302, 0x303, 0x304, 0x310};
+    } can;
   } output;
+
+  // Where the sensor sits on the vehicle and how the training map frame maps
+  // to the ECU's (runtime/pose/pose_geometry.h).
+  struct Extrinsics {
+    double sensor_xyz[3] = {0, 0, 0};      // sensor origin in base_link, metres
+    double sensor_rpy_deg[3] = {0, 0, 0};  // roll pitch yaw of the sensor in base_link
+    double map_offset_xyz[3] = {0, 0, 0};
+    double map_offset_rpy_deg[3] = {0, 0, 0};
+  } extrinsics;
 
   struct Supervisor {
     double rate_hz = 50.0;

@@ -41,6 +41,12 @@ void sd_notify_text(const char* text) {
   close(fd);
 }
 
+int64_t realtime_ns() {
+  timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return int64_t(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
+
 double yaw_deg(const double* q) {
   const double w = q[0], x = q[1], y = q[2], z = q[3];
   return std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)) * 180.0 / M_PI;
@@ -106,6 +112,9 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
     return Error(Errc::kInvalidArgument, "run: cannot map %dx%d frames to the model's %dx%d input",
                  width, height, pp.size, pp.size);
   }
+  auto outputs = PoseOutputs::create(config, r->engine_->meta());
+  if (!outputs) return outputs.error();
+  r->outputs_ = std::move(outputs.value());
   r->ring_.reset(new (std::nothrow) SpscRing<PoseRecord, 64>());
   if (!r->ring_) return Error(Errc::kOutOfMemory, "run: out of memory");
   const size_t capacity = config.source.replay.loop ? size_t(1) << 20 : frames + 16;
@@ -323,8 +332,24 @@ void Runtime::print_pose(const PoseRecord& r) {
 
 void Runtime::publish_loop() {
   PoseRecord r;
+  const int64_t status_period = int64_t(1e9 / config_.output.status_rate_hz);
+  int64_t next_status = monotonic_ns();
+  double last_inference_ms = 0;
   for (;;) {
     publish_beat_.store(monotonic_ns(), std::memory_order_release);
+    if (monotonic_ns() >= next_status) {
+      next_status += status_period;
+      StatusSnapshot st;
+      st.state = RunState(state_.load(std::memory_order_relaxed));
+      st.reason = reason_.load(std::memory_order_acquire);
+      st.poses = poses_.load(std::memory_order_relaxed);
+      st.flagged = poses_flagged_.load(std::memory_order_relaxed);
+      st.deadline_misses = deadline_misses_.load(std::memory_order_relaxed);
+      st.frames_skipped = frames_skipped_.load(std::memory_order_relaxed);
+      st.last_flags = last_flags_.load(std::memory_order_relaxed);
+      st.last_inference_ms = last_inference_ms;
+      outputs_->publish_status(st, realtime_ns());
+    }
     if (!ring_->pop(&r)) {
       if (inference_done_.load(std::memory_order_acquire) && ring_->size() == 0) break;
       if (stop_.load(std::memory_order_acquire) && ring_->size() == 0) break;
@@ -334,6 +359,9 @@ void Runtime::publish_loop() {
     }
     const int64_t now = monotonic_ns();
     if (config_.output.console) print_pose(r);
+    // The frame's monotonic capture time in wall-clock time, for the stamps.
+    outputs_->publish(r, now, realtime_ns() - now);
+    last_inference_ms = double(r.inference_end_ns - r.inference_start_ns) * 1e-6;
     if (timing_count_ < timings_.size()) {
       timings_[timing_count_++] = {r.capture_ns, r.inference_start_ns, r.inference_end_ns, now};
     }
@@ -430,6 +458,7 @@ int Runtime::run() {
       h.last_frame_ns = h.now_ns;  // a finished replay is not stale
     const RunState st = supervisor_.step(h);
     state_.store(uint8_t(st), std::memory_order_relaxed);
+    reason_.store(supervisor_.reason(), std::memory_order_release);
     if (st != last) {
       char msg[192];
       std::snprintf(msg, sizeof msg, "STATUS=%s: %s", run_state_name(st), supervisor_.reason());
@@ -468,7 +497,10 @@ int Runtime::run() {
   stats_.poses_flagged = poses_flagged_.load();
   stats_.deadline_misses = deadline_misses_.load();
   stats_.ring_full = ring_full_.load();
-  if (config_.output.summary) print_summary();
+  if (config_.output.summary) {
+    print_summary();
+    outputs_->print_summary();
+  }
   return code;
 }
 

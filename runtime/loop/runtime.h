@@ -3,7 +3,8 @@
 //   capture thread    source.next() -> FrameSlot (latest frame, drops stale)
 //   inference thread  FrameSlot -> preprocess -> Engine::run -> decode_pose
 //                     -> sanity flags -> PoseRecord ring
-//   publish thread    PoseRecord ring -> outputs (console; DDS and CAN plug in here)
+//   publish thread    PoseRecord ring -> console, base_link geometry, DDS, CAN;
+//                     status (DiagnosticArray) at output.status_rate_hz
 //   supervisor        the calling thread: health at a fixed rate, state,
 //                     watchdog and systemd notifications, shutdown
 //
@@ -23,6 +24,7 @@
 #include "kernels/common/preprocess_image.h"
 #include "runtime/config/config.h"
 #include "runtime/engine/engine.h"
+#include "runtime/loop/pose_outputs.h"
 #include "runtime/loop/pose_record.h"
 #include "runtime/loop/spsc_ring.h"
 #include "runtime/loop/supervisor.h"
@@ -53,6 +55,7 @@ class Runtime {
 
   const RunStats& stats() const { return stats_; }
   const Engine& engine() const { return *engine_; }
+  const PoseOutputs& outputs() const { return *outputs_; }
   // Timing of every published pose, in order (capacity fixed at create()).
   const TimingRecord* timings(size_t* count) const {
     *count = timing_count_;
@@ -77,6 +80,7 @@ class Runtime {
   std::unique_ptr<FrameSlot> slot_;
   std::unique_ptr<kernels::PreprocessPlan> plan_;
   std::unique_ptr<SpscRing<PoseRecord, 64>> ring_;
+  std::unique_ptr<PoseOutputs> outputs_;
   Supervisor supervisor_{Config::Supervisor{}};
 
   std::atomic<bool> stop_{false};
@@ -88,6 +92,7 @@ class Runtime {
   std::atomic<uint64_t> poses_{0};
   std::atomic<uint32_t> last_flags_{0};
   std::atomic<uint8_t> state_{uint8_t(RunState::kStarting)};
+  std::atomic<const char*> reason_{"starting"};  // static strings of the supervisor
   std::atomic<uint64_t> frames_captured_{0}, frames_skipped_{0}, ring_full_{0};
   std::atomic<uint64_t> poses_flagged_{0}, deadline_misses_{0};
 

@@ -42,6 +42,54 @@ threads:
   EXPECT_EQ(c->threads.inference.cpu, 1);
 }
 
+TEST(Config, OutputsAndExtrinsics) {
+  auto c = parse_config(R"(
+model: m.aprt
+source: {replay: {path: d}}
+output:
+  frame_id: map_ecu
+  sigma_position_m: 1.5
+  dds: {enabled: true, domain: 7, pose_topic: /sensing/aprt/pose, reliability: best_effort, depth: 5}
+  can: {enabled: true, interface: vcan0, fd: true, cycle_ms: 100, ids: {status: 0x200, fd: 0x7ff}}
+extrinsics:
+  sensor_to_base_link: {xyz: [1.2, 0, 1.55], rpy_deg: [0, 3, 0]}
+  map_offset: {xyz: [1000, -2000.5, 0]}
+)",
+                        "test.yaml");
+  ASSERT_TRUE(c) << c.error().message();
+  EXPECT_EQ(c->output.frame_id, "map_ecu");
+  EXPECT_EQ(c->output.sigma_position_m, 1.5);
+  EXPECT_TRUE(c->output.dds.enabled);
+  EXPECT_EQ(c->output.dds.domain, 7);
+  EXPECT_EQ(c->output.dds.pose_topic, "/sensing/aprt/pose");
+  EXPECT_EQ(c->output.dds.reliability, "best_effort");
+  EXPECT_EQ(c->output.dds.depth, 5);
+  EXPECT_TRUE(c->output.can.fd);
+  EXPECT_EQ(c->output.can.interface, "vcan0");
+  EXPECT_EQ(c->output.can.cycle_ms, 100.0);
+  EXPECT_EQ(c->output.can.ids[0], 0x200);
+  EXPECT_EQ(c->output.can.ids[1], 0x301);  // default kept
+  EXPECT_EQ(c->output.can.ids[5], 0x7ff);
+  EXPECT_EQ(c->extrinsics.sensor_xyz[2], 1.55);
+  EXPECT_EQ(c->extrinsics.sensor_rpy_deg[1], 3.0);
+  EXPECT_EQ(c->extrinsics.map_offset_xyz[1], -2000.5);
+}
+
+TEST(Config, RefusesBadOutputs) {
+  expect_refused("model: m\nsource: {replay: {path: d}}\noutput: {can: {ids: {status: 0x800}}}",
+                 "test.yaml:3: output.can.ids.status: expected an identifier in [0x0, 0x7ff]");
+  expect_refused("model: m\nsource: {replay: {path: d}}\noutput: {can: {ids: {pos_xy: 0x300}}}",
+                 "output.can.ids: status and pos_xy share id 0x300");
+  expect_refused("model: m\nsource: {replay: {path: d}}\noutput: {dds: {reliability: maybe}}",
+                 "output.dds.reliability: 'maybe' is not one of: reliable, best_effort");
+  expect_refused(
+      "model: m\nsource: {replay: {path: d}}\nextrinsics: {sensor_to_base_link: {xyz: [1, 2]}}",
+      "extrinsics.sensor_to_base_link.xyz: expected a list of 3 numbers");
+  expect_refused(
+      "model: m\nsource: {replay: {path: d}}\nextrinsics: {map_offset: {rpy_deg: [0, 0, x]}}",
+      "extrinsics.map_offset.rpy_deg[2]: expected a number");
+}
+
 TEST(Config, RecordedRate) {
   auto c = parse_config("model: m\nsource: {replay: {path: d, rate_hz: recorded}}\n", "t");
   ASSERT_TRUE(c) << c.error().message();

@@ -1,0 +1,73 @@
+// Where a pose goes after the console: base_link in the ECU's map frame
+// (PoseGeometry), then DDS (PoseWithCovarianceStamped + DiagnosticArray) and
+// CAN (config/aprt_pose.dbc). Created before the loop starts; an output that
+// cannot start (no DDS, no SocketCAN, CAN interface missing) is reported with
+// its reason and the rest keeps running -- a missing CAN interface is retried
+// per recover interval, since a CAN driver may come up after aprt.
+//
+// Validity: DDS's message has no validity field, so a flagged estimate is
+// never published on the pose topic (the diagnostics say why); on CAN it goes
+// out with Valid = 0 and its flags.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "drivers/can/pose_can_sender.h"
+#include "drivers/can/socketcan.h"
+#include "runtime/config/config.h"
+#include "runtime/engine/model_file.h"
+#include "runtime/loop/pose_record.h"
+#include "runtime/pose/pose_geometry.h"
+
+namespace aprt {
+
+class DdsPublisher;
+
+struct OutputStats {
+  uint64_t dds_poses = 0, dds_withheld = 0, dds_errors = 0, dds_status = 0;
+  uint64_t can_sent = 0, can_throttled = 0, can_dropped = 0;
+};
+
+// What the status message reports besides the outputs' own counters.
+struct StatusSnapshot {
+  RunState state = RunState::kStarting;
+  const char* reason = "";
+  uint64_t poses = 0, flagged = 0, deadline_misses = 0, frames_skipped = 0;
+  uint32_t last_flags = 0;
+  double last_inference_ms = 0;
+};
+
+class PoseOutputs {
+ public:
+  static Expected<std::unique_ptr<PoseOutputs>> create(const Config& config, const ModelMeta& meta);
+  ~PoseOutputs();
+
+  // @rt. now_ns: CLOCK_MONOTONIC; realtime_offset_ns: CLOCK_REALTIME - CLOCK_MONOTONIC.
+  void publish(const PoseRecord& r, int64_t now_ns, int64_t realtime_offset_ns) noexcept;
+  // @rt. At output.status_rate_hz (the caller paces it).
+  void publish_status(const StatusSnapshot& s, int64_t realtime_ns) noexcept;
+
+  const OutputStats& stats() const { return stats_; }
+  const can::SenderStats* can_stats() const;
+  bool dds_active() const { return dds_ != nullptr; }
+  bool can_active() const { return can_sender_ != nullptr; }
+  // The last base_link pose computed (for tests and the console).
+  const BasePose& last_base_pose() const { return last_; }
+  void print_summary() const;
+
+ private:
+  PoseOutputs() = default;
+  Config::Output cfg_;
+  std::unique_ptr<PoseGeometry> geometry_;
+  double sigma_pos_ = 0, sigma_rot_deg_ = 0;
+  std::unique_ptr<DdsPublisher> dds_;
+  std::unique_ptr<can::SocketCan> can_socket_;
+  std::unique_ptr<can::PoseCanSender> can_sender_;
+  BasePose last_{};
+  OutputStats stats_;
+  std::string dds_off_reason_, can_off_reason_;
+};
+
+}  // namespace aprt

@@ -1,0 +1,58 @@
+#include "runtime/pose/pose_geometry.h"
+
+#include <cmath>
+
+namespace aprt {
+
+RigidTransform RigidTransform::from_xyz_rpy(const double xyz[3], const double rpy_deg[3]) {
+  RigidTransform t;
+  t.translation = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+  const double k = M_PI / 180.0;
+  t.rotation = Eigen::AngleAxisd(rpy_deg[2] * k, Eigen::Vector3d::UnitZ()) *
+               Eigen::AngleAxisd(rpy_deg[1] * k, Eigen::Vector3d::UnitY()) *
+               Eigen::AngleAxisd(rpy_deg[0] * k, Eigen::Vector3d::UnitX());
+  t.rotation.normalize();
+  return t;
+}
+
+Eigen::Isometry3d RigidTransform::isometry() const {
+  Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
+  m.linear() = rotation.toRotationMatrix();
+  m.translation() = translation;
+  return m;
+}
+
+PoseGeometry::PoseGeometry(const RigidTransform& sensor_on_base, const RigidTransform& map_offset,
+                           double sigma_position_m, double sigma_orientation_rad)
+    : base_from_sensor_inv_(sensor_on_base.isometry().inverse()),
+      offset_(map_offset.isometry()),
+      var_pos_(sigma_position_m * sigma_position_m),
+      var_rot_(sigma_orientation_rad * sigma_orientation_rad) {}
+
+BasePose PoseGeometry::to_base_link(const PoseEstimate& s) noexcept {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  Eigen::Quaterniond q(s.orientation[0], s.orientation[1], s.orientation[2], s.orientation[3]);
+  q.normalize();
+  t.linear() = q.toRotationMatrix();
+  t.translation() = Eigen::Vector3d(s.position[0], s.position[1], s.position[2]);
+  const Eigen::Isometry3d base = offset_ * t * base_from_sensor_inv_;
+  BasePose out;
+  out.position = base.translation();
+  Eigen::Quaterniond r(base.linear());
+  r.normalize();
+  if (r.coeffs().allFinite() && out.position.allFinite()) {
+    if (have_previous_ && r.dot(previous_) < 0) r.coeffs() = -r.coeffs();  // continuity
+    previous_ = r;
+    have_previous_ = true;
+  }
+  out.orientation = r;
+  // The model's error is isotropic: the same diagonal in any frame.
+  for (int i = 0; i < 36; ++i) out.covariance[i] = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    out.covariance[i * 6 + i] = var_pos_;
+    out.covariance[(i + 3) * 6 + (i + 3)] = var_rot_;
+  }
+  return out;
+}
+
+}  // namespace aprt
