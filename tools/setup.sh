@@ -22,6 +22,8 @@ PACKAGES=(
   libopenblas0-pthread
   # aarch64 cross build, its tests under user-mode emulation
   g++-aarch64-linux-gnu qemu-user
+  # the HIL rig: Debian's kernel (downloaded, never installed) under qemu, busybox userland
+  qemu-system-x86 busybox-static cpio xz-utils iproute2
 )
 
 missing=()

@@ -8,6 +8,8 @@
 #   tools/test.sh --aarch64  cross build for aarch64; unit, kernel and tiny golden
 #                            tests under qemu-aarch64 as Cortex-A72 (no dotprod)
 #                            and Cortex-A76 (dotprod)
+#   tools/test.sh --hil [S]  the HIL scenarios (tests/hil: SocketCAN on vcan, softdog)
+#                            in a Debian-kernel VM under qemu; S: one scenario
 # Run tools/setup.sh first (it installs and builds).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -48,8 +50,14 @@ case "${1:-}" in
       QEMU_CPU=$cpu ctest --preset aarch64 -L "unit|kernels|golden" --timeout 900
     done
     ;;
+  --hil)
+    cmake --preset release >/dev/null
+    cmake --build --preset release -j "$jobs" --target aprt aprt_synth
+    shift
+    tests/hil/run.sh "$@"
+    ;;
   *)
-    echo "usage: tools/test.sh [--slow | --fuzz SECONDS | --tsan | --aarch64]" >&2
+    echo "usage: tools/test.sh [--slow | --fuzz SECONDS | --tsan | --aarch64 | --hil [SCENARIO]]" >&2
     exit 2
     ;;
 esac

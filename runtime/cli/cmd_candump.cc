@@ -4,6 +4,7 @@
 // interface or a candump log, checked like a receiver checks them (E2E CRC,
 // alive counter continuity, the five classic frames of one estimate
 // together) and decoded with the DBC file into poses.
+#include <cerrno>
 #include <cinttypes>
 #include <cmath>
 #include <csignal>
@@ -20,10 +21,6 @@
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
 #include "runtime/config/config.h"
-
-#ifndef APRT_DATA_DIR
-#define APRT_DATA_DIR "."
-#endif
 
 namespace aprt::cli {
 namespace {
@@ -193,13 +190,12 @@ int cmd_candump(int argc, char** argv) {
         "  --raw           print every frame's signals too\n"
         "  --quiet         the summary only\n"
         "  --strict        exit 1 if any CRC, counter or grouping error was seen\n",
-        APRT_DATA_DIR);
+        data_dir().c_str());
     return 0;
   }
   const char* interface = args.value("--interface");
   const char* log = args.value("--log");
-  const std::string dbc_path =
-      args.value("--dbc", (std::string(APRT_DATA_DIR) + "/config/aprt_pose.dbc").c_str());
+  const std::string dbc_path = args.value("--dbc", (data_dir() + "/config/aprt_pose.dbc").c_str());
   const char* config_path = args.value("--config");
   const long count = args.integer("--count", 0, 0, 1L << 40);
   const long timeout_s = args.integer("--timeout", 0, 0, 1L << 20);
@@ -294,6 +290,11 @@ int cmd_candump(int argc, char** argv) {
       can::Frame f;
       int64_t ts = 0;
       const int r = sock.value()->read(&f, 100, &ts);
+      if (r < 0 && sock.value()->last_errno() == ENETDOWN) {
+        // The interface went down: a receiver waits for it to come back.
+        if (!quiet) std::printf("# %s is down\n", interface);
+        continue;
+      }
       if (r < 0) {
         std::fprintf(stderr, "aprt candump: read from %s failed: %s\n", interface,
                      std::strerror(sock.value()->last_errno()));

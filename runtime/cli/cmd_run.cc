@@ -13,10 +13,6 @@
 #include "runtime/config/config.h"
 #include "runtime/loop/runtime.h"
 
-#ifndef APRT_DATA_DIR
-#define APRT_DATA_DIR "."
-#endif
-
 namespace aprt::cli {
 namespace {
 
@@ -24,12 +20,6 @@ Runtime* g_runtime = nullptr;
 
 void on_signal(int) {
   if (g_runtime) g_runtime->request_stop();
-}
-
-// Where the shipped model, demo drive and default configuration live.
-std::string data_dir() {
-  const char* env = std::getenv("APRT_DATA_DIR");
-  return env && *env ? env : APRT_DATA_DIR;
 }
 
 // Relative paths in a configuration are relative to `base`.

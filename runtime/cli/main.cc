@@ -1,6 +1,8 @@
 // aprt: the runtime's one binary.
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <string>
 
 #include "runtime/cli/commands.h"
 
@@ -21,6 +23,15 @@ void usage(FILE* out) {
 }
 
 }  // namespace
+
+#ifndef APRT_DATA_DIR
+#define APRT_DATA_DIR "."
+#endif
+
+std::string aprt::cli::data_dir() {
+  const char* env = std::getenv("APRT_DATA_DIR");
+  return env && *env ? env : APRT_DATA_DIR;
+}
 
 int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {

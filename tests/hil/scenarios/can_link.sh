@@ -1,0 +1,28 @@
+# Bus trouble: the interface is missing at start (appears later), then goes
+# down and up during the run. aprt keeps running, counts it, recovers, and
+# the receiver never sees a CRC or counter error.
+. /hil/lib.sh
+/aprt/bin/aprt run --config /hil/can_paced.yaml > /tmp/run.txt 2>&1 &
+run=$!
+sleep 1
+ip link add dev vcan0 type vcan && ip link set vcan0 up
+/aprt/bin/aprt candump --interface vcan0 --timeout 3 --strict > /tmp/dump.txt 2>&1 &
+dump=$!
+sleep 1
+ip link set vcan0 down
+sleep 0.6
+ip link set vcan0 up
+wait $run
+check "aprt run ends cleanly" [ $? -eq 0 ]
+wait $dump
+check "candump --strict: no CRC or counter error across the outage" [ $? -eq 0 ]
+sed 's/^/# run: /' /tmp/run.txt; grep -v "^ *[0-9.]*  ctr" /tmp/dump.txt | sed 's/^/# dump: /'
+grep -q "interface 'vcan0' not found" /tmp/run.txt; check "missing interface at start reported" [ $? -eq 0 ]
+reopened=$(sed -n 's/.*reopened \([0-9]*\).*/\1/p' /tmp/run.txt)
+down=$(sed -n 's/.*link down \([0-9]*\).*/\1/p' /tmp/run.txt)
+sent=$(field "estimates sent" /tmp/run.txt)
+[ "${reopened:-0}" -ge 1 ]; check "reopened once the interface appeared ($reopened)" [ $? -eq 0 ]
+[ "${down:-0}" -ge 1 ]; check "link down counted ($down)" [ $? -eq 0 ]
+[ "${sent:-0}" -ge 5 ]; check "estimates sent around the outage ($sent)" [ $? -eq 0 ]
+tail -2 /tmp/dump.txt | grep -q ' ctr '; check "estimates arrive after the link came back" [ $? -eq 0 ]
+done_testing
