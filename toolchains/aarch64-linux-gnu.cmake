@@ -15,3 +15,13 @@ set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE ONLY)
 set(CMAKE_CROSSCOMPILING_EMULATOR qemu-aarch64 -L /usr/aarch64-linux-gnu)
+
+# Target libraries unpacked by tools/aarch64_sysroot.sh (libyaml, libpng, libjpeg, zlib; static).
+set(APRT_AARCH64_SYSROOT "${CMAKE_CURRENT_LIST_DIR}/../build/sysroot-aarch64" CACHE PATH
+    "Unpacked arm64 .debs for the cross build")
+list(APPEND CMAKE_FIND_ROOT_PATH ${APRT_AARCH64_SYSROOT})
+set(ENV{PKG_CONFIG_LIBDIR} "${APRT_AARCH64_SYSROOT}/usr/lib/aarch64-linux-gnu/pkgconfig")
+set(ENV{PKG_CONFIG_SYSROOT_DIR} "${APRT_AARCH64_SYSROOT}")
+# Debian's multiarch headers (jconfig.h) live in usr/include/aarch64-linux-gnu.
+set(CMAKE_C_STANDARD_INCLUDE_DIRECTORIES ${APRT_AARCH64_SYSROOT}/usr/include/aarch64-linux-gnu)
+set(CMAKE_CXX_STANDARD_INCLUDE_DIRECTORIES ${APRT_AARCH64_SYSROOT}/usr/include/aarch64-linux-gnu)

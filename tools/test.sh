@@ -30,7 +30,7 @@ case "${1:-}" in
   --fuzz)
     seconds="${2:-60}"
     cmake --preset fuzz >/dev/null
-    cmake --build --preset fuzz -j "$jobs"
+    cmake --build --preset fuzz -j "$jobs" --target model_file_fuzz write_seed
     corpus=build/fuzz/corpus
     mkdir -p "$corpus"
     build/fuzz/bin/write_seed "$corpus"
@@ -43,6 +43,7 @@ case "${1:-}" in
     TSAN_OPTIONS="halt_on_error=1" build/tsan/bin/unit_tests --gtest_filter='Engine.*'
     ;;
   --aarch64)
+    tools/aarch64_sysroot.sh
     cmake --preset aarch64 >/dev/null
     cmake --build --preset aarch64 -j "$jobs"
     for cpu in cortex-a72 cortex-a76; do

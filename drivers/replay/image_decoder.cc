@@ -250,6 +250,14 @@ ImageDecoder::~ImageDecoder() = default;
 void* ImageDecoder::arena_alloc(size_t) {
   return nullptr;
 }
+Expected<DecodedImage> ImageDecoder::decode(const char* path, uint8_t*, size_t) {
+  return Error(Errc::kUnsupported, "image decoder: cannot decode '%s': this build has no PNG/JPEG",
+               path);
+}
+Expected<DecodedImage> ImageDecoder::probe(const char* path) {
+  return Error(Errc::kUnsupported, "image decoder: cannot read '%s': this build has no PNG/JPEG",
+               path);
+}
 
 }  // namespace aprt
 #endif

@@ -49,7 +49,8 @@ std::vector<VehiclePose> drive(const Town& town, const RouteOptions& opt) {
   std::pair<int, int> prev{-1, -1};
   double length = 0;
   while (length < opt.max_length && (!opt.cover_all || int(driven.size()) < total_edges)) {
-    const auto [i, j] = nodes.back();
+    // Plain copies, not a structured binding: clang 14 cannot capture those in a lambda.
+    const int i = nodes.back().first, j = nodes.back().second;
     auto nb = neighbours(i, j);
     std::shuffle(nb.begin(), nb.end(), rng);
     std::stable_sort(nb.begin(), nb.end(), [&](auto a, auto b) {
