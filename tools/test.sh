@@ -4,7 +4,7 @@
 #                            the slow suites, on the ASan+UBSan build (~1 minute)
 #   tools/test.sh --slow     full-size golden models (224 and 128) on the release build
 #   tools/test.sh --fuzz N   the model-file fuzzer for N seconds (clang, libFuzzer)
-#   tools/test.sh --tsan     the threaded engine tests under ThreadSanitizer
+#   tools/test.sh --tsan     the threaded engine and the supervised loop under ThreadSanitizer
 #   tools/test.sh --aarch64  cross build for aarch64; unit, kernel and tiny golden
 #                            tests under qemu-aarch64 as Cortex-A72 (no dotprod)
 #                            and Cortex-A76 (dotprod)
@@ -39,8 +39,14 @@ case "${1:-}" in
     ;;
   --tsan)
     cmake --preset tsan >/dev/null
-    cmake --build --preset tsan -j "$jobs" --target unit_tests kernel_tests
+    cmake --build --preset tsan -j "$jobs" --target unit_tests kernel_tests run_loop_tests
     TSAN_OPTIONS="halt_on_error=1" build/tsan/bin/unit_tests --gtest_filter='Engine.*'
+    # The supervised loop's four threads, end to end: its fixtures (tiny model,
+    # synthetic drive) come from the default run's build.
+    cmake --preset asan >/dev/null
+    cmake --build --preset asan -j "$jobs" --target aprt_synth >/dev/null
+    ctest --preset asan -R 'run\.replay\.generate' --timeout 600 >/dev/null
+    TSAN_OPTIONS="halt_on_error=1" APRT_RUN_FIXTURES="$PWD/build/asan" build/tsan/bin/run_loop_tests
     ;;
   --aarch64)
     tools/aarch64_sysroot.sh

@@ -77,38 +77,64 @@ uint8_t e2e_crc(uint16_t data_id, const uint8_t* payload, size_t len) {
   return uint8_t(crc ^ 0xFF);
 }
 
+namespace {
+
+// Every signal of one estimate as raw integers, and what saturation did to validity.
+struct PackedPose {
+  Packed x, y, z, qw, qx, qy, qz, sigma_pos, sigma_yaw;
+  uint16_t flags;
+  bool valid;
+};
+
+PackedPose pack_pose(const PoseSignals& s, double pos_scale, int xy_bits, int z_bits) {
+  PackedPose p;
+  p.x = pack_signed(s.x, pos_scale, xy_bits);
+  p.y = pack_signed(s.y, pos_scale, xy_bits);
+  p.z = pack_signed(s.z, pos_scale, z_bits);
+  p.qw = pack_signed(s.qw, kQuatScale, 16);
+  p.qx = pack_signed(s.qx, kQuatScale, 16);
+  p.qy = pack_signed(s.qy, kQuatScale, 16);
+  p.qz = pack_signed(s.qz, kQuatScale, 16);
+  p.sigma_pos = pack_unsigned(s.sigma_pos_m, 0.01, 16);
+  p.sigma_yaw = pack_unsigned(s.sigma_yaw_deg, 0.1, 8);
+  const bool sat = p.x.saturated || p.y.saturated || p.z.saturated || p.qw.saturated ||
+                   p.qx.saturated || p.qy.saturated || p.qz.saturated || p.sigma_pos.saturated ||
+                   p.sigma_yaw.saturated;
+  p.flags = uint16_t(s.flags | (sat ? kFlagSaturated : 0));
+  p.valid = s.valid && p.flags == 0;
+  return p;
+}
+
+// State, Flags, Valid at bits 12..32 (status message and FD frame alike).
+void put_status(uint8_t* data, const PoseSignals& s, const PackedPose& p) {
+  put_bits(data, 12, 4, s.state);
+  put_bits(data, 16, 16, p.flags);
+  put_bits(data, 32, 1, p.valid ? 1 : 0);
+}
+
+}  // namespace
+
 int encode_classic(const PoseSignals& s, uint8_t counter, const Ids& ids,
                    Frame out[kClassicFrames]) {
-  const Packed x = pack_signed(s.x, 0.01, 24), y = pack_signed(s.y, 0.01, 24);
-  const Packed z = pack_signed(s.z, 0.01, 16);
-  const Packed qw = pack_signed(s.qw, kQuatScale, 16), qx = pack_signed(s.qx, kQuatScale, 16);
-  const Packed qy = pack_signed(s.qy, kQuatScale, 16), qz = pack_signed(s.qz, kQuatScale, 16);
-  const Packed sp = pack_unsigned(s.sigma_pos_m, 0.01, 16),
-               sy = pack_unsigned(s.sigma_yaw_deg, 0.1, 8);
-  const bool sat = x.saturated || y.saturated || z.saturated || qw.saturated || qx.saturated ||
-                   qy.saturated || qz.saturated || sp.saturated || sy.saturated;
-  const uint16_t flags = uint16_t(s.flags | (sat ? kFlagSaturated : 0));
-  const bool valid = s.valid && !sat && flags == 0;
+  const PackedPose p = pack_pose(s, 0.01, 24, 16);
   for (int i = 0; i < kClassicFrames; ++i) {
     out[i] = Frame{};
     out[i].len = 8;
   }
   out[0].id = ids.status;
-  put_bits(out[0].data, 12, 4, s.state);
-  put_bits(out[0].data, 16, 16, flags);
-  put_bits(out[0].data, 32, 1, valid ? 1 : 0);
-  put_bits(out[0].data, 40, 16, uint64_t(sp.raw));
-  put_bits(out[0].data, 56, 8, uint64_t(sy.raw));
+  put_status(out[0].data, s, p);
+  put_bits(out[0].data, 40, 16, uint64_t(p.sigma_pos.raw));
+  put_bits(out[0].data, 56, 8, uint64_t(p.sigma_yaw.raw));
   out[1].id = ids.pos_xy;
-  put_bits(out[1].data, 16, 24, uint64_t(x.raw));
-  put_bits(out[1].data, 40, 24, uint64_t(y.raw));
+  put_bits(out[1].data, 16, 24, uint64_t(p.x.raw));
+  put_bits(out[1].data, 40, 24, uint64_t(p.y.raw));
   out[2].id = ids.pos_zqw;
-  put_bits(out[2].data, 16, 16, uint64_t(z.raw));
-  put_bits(out[2].data, 32, 16, uint64_t(qw.raw));
-  put_bits(out[2].data, 48, 16, uint64_t(qx.raw));
+  put_bits(out[2].data, 16, 16, uint64_t(p.z.raw));
+  put_bits(out[2].data, 32, 16, uint64_t(p.qw.raw));
+  put_bits(out[2].data, 48, 16, uint64_t(p.qx.raw));
   out[3].id = ids.quat_yz;
-  put_bits(out[3].data, 16, 16, uint64_t(qy.raw));
-  put_bits(out[3].data, 32, 16, uint64_t(qz.raw));
+  put_bits(out[3].data, 16, 16, uint64_t(p.qy.raw));
+  put_bits(out[3].data, 32, 16, uint64_t(p.qz.raw));
   out[4].id = ids.time;
   put_bits(out[4].data, 16, 48, s.timestamp_us & ((uint64_t(1) << 48) - 1));
   for (int i = 0; i < kClassicFrames; ++i) seal(&out[i], counter);
@@ -116,31 +142,21 @@ int encode_classic(const PoseSignals& s, uint8_t counter, const Ids& ids,
 }
 
 void encode_fd(const PoseSignals& s, uint8_t counter, const Ids& ids, Frame* out) {
-  const Packed x = pack_signed(s.x, 0.001, 32), y = pack_signed(s.y, 0.001, 32);
-  const Packed z = pack_signed(s.z, 0.001, 32);
-  const Packed qw = pack_signed(s.qw, kQuatScale, 16), qx = pack_signed(s.qx, kQuatScale, 16);
-  const Packed qy = pack_signed(s.qy, kQuatScale, 16), qz = pack_signed(s.qz, kQuatScale, 16);
-  const Packed sp = pack_unsigned(s.sigma_pos_m, 0.01, 16),
-               sy = pack_unsigned(s.sigma_yaw_deg, 0.1, 8);
-  const bool sat = x.saturated || y.saturated || z.saturated || qw.saturated || qx.saturated ||
-                   qy.saturated || qz.saturated || sp.saturated || sy.saturated;
-  const uint16_t flags = uint16_t(s.flags | (sat ? kFlagSaturated : 0));
+  const PackedPose p = pack_pose(s, 0.001, 32, 32);
   *out = Frame{};
   out->id = ids.fd;
   out->len = kFdLength;
   out->fd = true;
-  put_bits(out->data, 12, 4, s.state);
-  put_bits(out->data, 16, 16, flags);
-  put_bits(out->data, 32, 1, (s.valid && !sat && flags == 0) ? 1 : 0);
-  put_bits(out->data, 40, 32, uint64_t(x.raw));
-  put_bits(out->data, 72, 32, uint64_t(y.raw));
-  put_bits(out->data, 104, 32, uint64_t(z.raw));
-  put_bits(out->data, 136, 16, uint64_t(qw.raw));
-  put_bits(out->data, 152, 16, uint64_t(qx.raw));
-  put_bits(out->data, 168, 16, uint64_t(qy.raw));
-  put_bits(out->data, 184, 16, uint64_t(qz.raw));
-  put_bits(out->data, 200, 16, uint64_t(sp.raw));
-  put_bits(out->data, 216, 8, uint64_t(sy.raw));
+  put_status(out->data, s, p);
+  put_bits(out->data, 40, 32, uint64_t(p.x.raw));
+  put_bits(out->data, 72, 32, uint64_t(p.y.raw));
+  put_bits(out->data, 104, 32, uint64_t(p.z.raw));
+  put_bits(out->data, 136, 16, uint64_t(p.qw.raw));
+  put_bits(out->data, 152, 16, uint64_t(p.qx.raw));
+  put_bits(out->data, 168, 16, uint64_t(p.qy.raw));
+  put_bits(out->data, 184, 16, uint64_t(p.qz.raw));
+  put_bits(out->data, 200, 16, uint64_t(p.sigma_pos.raw));
+  put_bits(out->data, 216, 8, uint64_t(p.sigma_yaw.raw));
   put_bits(out->data, 224, 64, s.timestamp_us);
   seal(out, counter);
 }
