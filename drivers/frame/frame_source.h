@@ -24,6 +24,9 @@ class FrameSource {
   virtual const char* name() const = 0;
   // Largest frame in bytes (sizes the FrameSlot).
   virtual size_t max_frame_bytes() const = 0;
+  // True when next() stamps capture_ns with the device's own capture time
+  // (CLOCK_MONOTONIC); otherwise the capture thread stamps the arrival.
+  virtual bool driver_timestamps() const { return false; }
   virtual Status start() = 0;
   // Waits at most timeout_ns. Never allocates for a device source.
   virtual SourceResult next(FrameBuffer* dst, int64_t timeout_ns) = 0;

@@ -99,7 +99,9 @@ int cmd_run(int argc, char** argv) {
   sigaction(SIGTERM, &sa, nullptr);
   const Engine& e = (*runtime)->engine();
   std::printf("aprt run: %s (%s kernels, %d thread%s) on %s\n", cfg.model.c_str(), e.isa(),
-              e.threads(), e.threads() > 1 ? "s" : "", cfg.source.replay.path.c_str());
+              e.threads(), e.threads() > 1 ? "s" : "",
+              cfg.source.type == "replay" ? cfg.source.replay.path.c_str()
+                                          : cfg.source.v4l2.device.c_str());
   const int code = (*runtime)->run();
   g_runtime = nullptr;
   return code;

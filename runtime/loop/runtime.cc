@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "drivers/camera/v4l2_source.h"
 #include "drivers/replay/replay_source.h"
 
 namespace aprt {
@@ -82,22 +83,43 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
   if (!engine) return engine.error();
   r->engine_ = std::move(engine.value());
 
-  if (config.source.type != "replay") {
+  int width = 0, height = 0;
+  size_t frames = 0;
+  kernels::PixelFormat format = kernels::PixelFormat::kRgb24;
+  if (config.source.type == "replay") {
+    ReplayPacing pacing{config.source.replay.rate_hz, config.source.replay.recorded,
+                        config.source.replay.loop};
+    auto replay = ReplaySource::open(config.source.replay.path.c_str(), pacing);
+    if (!replay) return replay.error();
+    width = replay.value()->replay().width();
+    height = replay.value()->replay().height();
+    frames = replay.value()->replay().size();
+    r->source_ = std::move(replay.value());
+  } else if (config.source.type == "v4l2") {
+    const Config::Source::V4l2& v = config.source.v4l2;
+    V4l2Options vo;
+    vo.device = v.device;
+    vo.width = v.width;
+    vo.height = v.height;
+    vo.format = v.format;
+    vo.fps = v.fps;
+    vo.buffers = v.buffers;
+    auto cam = V4l2Source::create(vo);
+    if (!cam) return cam.error();
+    width = v.width;
+    height = v.height;
+    format = cam.value()->format();
+    r->source_ = std::move(cam.value());
+  } else {
     return Error(Errc::kUnsupported, "run: source type '%s' is not available in this build yet",
                  config.source.type.c_str());
   }
-  ReplayPacing pacing{config.source.replay.rate_hz, config.source.replay.recorded,
-                      config.source.replay.loop};
-  auto replay = ReplaySource::open(config.source.replay.path.c_str(), pacing);
-  if (!replay) return replay.error();
-  const int width = replay.value()->replay().width(), height = replay.value()->replay().height();
-  const size_t frames = replay.value()->replay().size();
-  r->source_ = std::move(replay.value());
 
   auto slot = FrameSlot::create(r->source_->max_frame_bytes());
   if (!slot) return slot.error();
   r->slot_ = std::move(slot.value());
-  if (config.source.replay.rate_hz == 0 && !config.source.replay.recorded) {
+  if (config.source.type == "replay" && config.source.replay.rate_hz == 0 &&
+      !config.source.replay.recorded) {
     static_cast<ReplaySource*>(r->source_.get())->pace_with(r->slot_.get());
   }
   const ModelMeta& m = r->engine_->meta();
@@ -107,8 +129,7 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
     pp.std[c] = m.norm_std[c];
   }
   r->plan_.reset(new (std::nothrow) kernels::PreprocessPlan());
-  if (!r->plan_ ||
-      !kernels::plan_preprocess(pp, kernels::PixelFormat::kRgb24, width, height, r->plan_.get())) {
+  if (!r->plan_ || !kernels::plan_preprocess(pp, format, width, height, r->plan_.get())) {
     return Error(Errc::kInvalidArgument, "run: cannot map %dx%d frames to the model's %dx%d input",
                  width, height, pp.size, pp.size);
   }
@@ -117,7 +138,8 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
   r->outputs_ = std::move(outputs.value());
   r->ring_.reset(new (std::nothrow) SpscRing<PoseRecord, 64>());
   if (!r->ring_) return Error(Errc::kOutOfMemory, "run: out of memory");
-  const size_t capacity = config.source.replay.loop ? size_t(1) << 20 : frames + 16;
+  const size_t capacity =
+      config.source.type != "replay" || config.source.replay.loop ? size_t(1) << 20 : frames + 16;
   r->timings_.resize(capacity);
   r->pos_errors_.reserve(capacity);
   r->rot_errors_.reserve(capacity);
@@ -196,19 +218,28 @@ void* Runtime::publish_main(void* self) {
 }
 
 void Runtime::capture_loop() {
+  const bool device = config_.source.type != "replay";
   if (Status s = source_->start(); !s) {
-    std::fprintf(stderr, "aprt run: %s\n", s.error().message());
+    std::fprintf(stderr, "aprt run: %s%s\n", s.error().message(),
+                 device ? " (retrying with back-off)" : "");
     source_failed_.store(true);
-    capture_done_.store(true);
-    return;
+    if (!device) {  // a replay that cannot start will not start later
+      capture_done_.store(true);
+      return;
+    }
   }
   while (!stop_.load(std::memory_order_acquire)) {
     capture_beat_.store(monotonic_ns(), std::memory_order_release);
     switch (source_->next(&slot_->back(), kWaitNs)) {
       case SourceResult::kFrame:
-        slot_->back().info.capture_ns = monotonic_ns();  // arrival, for frame age
+        if (!source_->driver_timestamps()) {
+          slot_->back().info.capture_ns = monotonic_ns();  // arrival, for frame age
+        }
         slot_->publish();
         frames_captured_.fetch_add(1, std::memory_order_relaxed);
+        if (source_failed_.exchange(false, std::memory_order_acq_rel)) {
+          std::fprintf(stderr, "aprt run: %s delivers frames again\n", source_->name());
+        }
         break;
       case SourceResult::kTimeout: break;
       case SourceResult::kSkipped:
@@ -216,7 +247,11 @@ void Runtime::capture_loop() {
         std::fprintf(stderr, "aprt run: frame skipped: %s\n", source_->error().message());
         break;
       case SourceResult::kEndOfStream: capture_done_.store(true, std::memory_order_release); return;
-      case SourceResult::kFailed: source_failed_.store(true, std::memory_order_release); break;
+      case SourceResult::kFailed:
+        if (!source_failed_.exchange(true, std::memory_order_acq_rel)) {
+          std::fprintf(stderr, "aprt run: %s\n", source_->error().message());
+        }
+        break;
     }
   }
   capture_done_.store(true, std::memory_order_release);

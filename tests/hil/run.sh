@@ -72,7 +72,8 @@ cp "$data/model.aprt" "$root/aprt/data/"
 cp -r "$data/drive" "$root/aprt/data/drive"
 
 # Modules and what they depend on, from modules.dep.
-mods="can can_raw can_dev vcan softdog"
+mods="can can_raw can_dev vcan softdog vivid"   # vivid is loaded by the camera scenarios
+load="can can_raw can_dev vcan softdog"
 mroot="$kdir/root/lib/modules/$kver"
 mkdir -p "$root/lib/modules/$kver"
 cp "$mroot"/modules.{dep,alias,builtin,order} "$root/lib/modules/$kver/" 2>/dev/null || true
@@ -84,7 +85,7 @@ for m in $mods; do
     cp "$mroot/$f" "$root/lib/modules/$kver/$f"
   done
 done
-echo "$mods" > "$root/etc/hil-modules"
+echo "$load" > "$root/etc/hil-modules"
 
 cat > "$root/init" <<'INIT'
 #!/bin/busybox sh
