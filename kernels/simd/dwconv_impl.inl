@@ -43,10 +43,13 @@ static void dwconv_rows_k(const Conv2dShape& s, const float* x, const float* w, 
         } else {
           const int kx_lo = ix0 < 0 ? -ix0 : 0;
           const int kx_hi = s.in_w - ix0 < KW ? s.in_w - ix0 : KW;
-          for (int ky = ky_lo; ky < ky_hi; ++ky) {
-            const float* xr = x + (size_t(iy0 + ky) * s.in_w + ix0) * C + c0;
+          for (int ky = ky_lo; ky < ky_hi && kx_lo < kx_hi; ++ky) {
+            // From the first tap inside the image: a pointer left of the row
+            // (ix0 < 0) would be out of the array even if never read.
+            const float* xr = x + (size_t(iy0 + ky) * s.in_w + size_t(ix0 + kx_lo)) * C + c0;
             for (int kx = kx_lo; kx < kx_hi; ++kx) {
-              const V xv = full ? vload(xr + kx * C) : vload_n(xr + kx * C, cn);
+              const float* xp = xr + size_t(kx - kx_lo) * C;
+              const V xv = full ? vload(xp) : vload_n(xp, cn);
               acc = vfmadd(xv, wv[ky][kx], acc);
             }
           }
