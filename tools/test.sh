@@ -8,6 +8,9 @@
 #   tools/test.sh --aarch64  cross build for aarch64; unit, kernel and tiny golden
 #                            tests under qemu-aarch64 as Cortex-A72 (no dotprod)
 #                            and Cortex-A76 (dotprod)
+#   tools/test.sh --package  .deb packages (amd64; arm64 when the aarch64 build
+#                            exists): contents, scratch-root install, aprt info,
+#                            aprt run, find_package(aprt) from another project
 #   tools/test.sh --hil [S]  the HIL scenarios (tests/hil: SocketCAN on vcan, softdog)
 #                            in a Debian-kernel VM under qemu; S: one scenario
 # Run tools/setup.sh first (it installs and builds).
@@ -58,6 +61,15 @@ case "${1:-}" in
       QEMU_CPU=$cpu ctest --preset aarch64 -L "unit|kernels|golden" --timeout 900
     done
     ;;
+  --package)
+    cmake --preset release >/dev/null
+    cmake --build --preset release -j "$jobs" --target aprt
+    tools/package_smoke.sh release
+    if [ -x build/aarch64/bin/aprt ]; then
+      cmake --preset aarch64 >/dev/null
+      tools/package_smoke.sh aarch64
+    fi
+    ;;
   --hil)
     cmake --preset release >/dev/null
     cmake --build --preset release -j "$jobs" --target aprt aprt_synth
@@ -65,7 +77,7 @@ case "${1:-}" in
     tests/hil/run.sh "$@"
     ;;
   *)
-    echo "usage: tools/test.sh [--slow | --fuzz SECONDS | --tsan | --aarch64 | --hil [SCENARIO]]" >&2
+    echo "usage: tools/test.sh [--slow | --fuzz SECONDS | --tsan | --aarch64 | --package | --hil [SCENARIO]]" >&2
     exit 2
     ;;
 esac

@@ -31,6 +31,7 @@ Status ReplaySource::start() {
 }
 
 SourceResult ReplaySource::next(FrameBuffer* dst, int64_t timeout_ns) {
+  if (pacing_.max_frames > 0 && sequence_ >= pacing_.max_frames) return SourceResult::kEndOfStream;
   if (index_ >= replay_->size()) {
     if (!pacing_.loop) return SourceResult::kEndOfStream;
     index_ = 0;

@@ -17,6 +17,7 @@ struct ReplayPacing {
   double rate_hz = 10.0;  // 0: as fast as the consumer
   bool recorded = false;  // use times.txt
   bool loop = false;
+  uint64_t max_frames = 0;  // end of stream after this many frames (loops included); 0: no limit
 };
 
 class ReplaySource final : public FrameSource {

@@ -51,4 +51,22 @@ const CpuFeatures& cpu_features() {
   return features;
 }
 
+const char* missing_build_feature() {
+  const CpuFeatures& f = cpu_features();
+  (void)f;
+#if defined(__AVX512F__) || defined(__AVX512BW__) || defined(__AVX512VL__)
+  if (!f.avx512) return "AVX-512 (F/DQ/BW/VL)";
+#endif
+#if defined(__AVX512VNNI__)
+  if (!f.avx512_vnni) return "AVX-512 VNNI";
+#endif
+#if defined(__AVX2__) || defined(__FMA__)
+  if (!f.avx2_fma) return "AVX2 + FMA";
+#endif
+#if defined(__aarch64__) && defined(__ARM_FEATURE_DOTPROD)
+  if (!f.neon_dot) return "the dot-product extension (FEAT_DotProd, +dotprod)";
+#endif
+  return nullptr;
+}
+
 }  // namespace aprt::kernels

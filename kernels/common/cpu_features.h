@@ -13,4 +13,11 @@ struct CpuFeatures {
 
 const CpuFeatures& cpu_features();
 
+// The first instruction-set extension the whole build was compiled to assume
+// (a global -march=... in CMAKE_CXX_FLAGS) that this CPU does not report, or
+// nullptr. Checked at start so such a binary stops with a message instead of
+// dying of SIGILL somewhere in the first frame. The kernels' own ISA flags
+// are per-file and chosen at run time; they never show up here.
+const char* missing_build_feature();
+
 }  // namespace aprt::kernels

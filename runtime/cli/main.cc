@@ -1,9 +1,12 @@
 // aprt: the runtime's one binary.
+#include <unistd.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
 
+#include "kernels/common/cpu_features.h"
 #include "runtime/cli/commands.h"
 
 namespace {
@@ -28,12 +31,32 @@ void usage(FILE* out) {
 #define APRT_DATA_DIR "."
 #endif
 
+// The shipped configuration, model and demo drive: $APRT_DATA_DIR if set;
+// else <prefix>/share/aprt beside an installed binary (<prefix>/bin/aprt),
+// wherever the package was unpacked; else the source tree of this build.
 std::string aprt::cli::data_dir() {
   const char* env = std::getenv("APRT_DATA_DIR");
-  return env && *env ? env : APRT_DATA_DIR;
+  if (env && *env) return env;
+  char exe[4096];
+  const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+  if (n > 0) {
+    std::string dir(exe, size_t(n));
+    dir = dir.substr(0, dir.rfind('/'));                  // <prefix>/bin
+    dir = dir.substr(0, dir.rfind('/')) + "/share/aprt";  // <prefix>/share/aprt
+    if (access((dir + "/config/default.yaml").c_str(), R_OK) == 0) return dir;
+  }
+  return APRT_DATA_DIR;
 }
 
 int main(int argc, char** argv) {
+  // Before anything else runs code the compiler may have vectorised for the build's -march.
+  if (const char* missing = aprt::kernels::missing_build_feature()) {
+    std::fprintf(stderr,
+                 "aprt: this binary was built for a CPU with %s; this CPU does not report it. "
+                 "Install the build for this target's baseline (see README, On the ECU).\n",
+                 missing);
+    return 70;
+  }
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
     usage(argc < 2 ? stderr : stdout);
     return argc < 2 ? 2 : 0;

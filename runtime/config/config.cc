@@ -233,7 +233,7 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(r.map(src, "source", {"type", "replay", "v4l2"}));
     APRT_TRY(r.str(src, "source", "type", &c.source.type, {"replay", "v4l2", "libcamera"}));
     const Node* rp = src ? src->get("replay") : nullptr;
-    APRT_TRY(r.map(rp, "source.replay", {"path", "rate_hz", "loop"}));
+    APRT_TRY(r.map(rp, "source.replay", {"path", "rate_hz", "loop", "frames"}));
     APRT_TRY(r.str(rp, "source.replay", "path", &c.source.replay.path));
     if (rp && rp->get("rate_hz") && rp->get("rate_hz")->scalar == "recorded") {
       c.source.replay.recorded = true;
@@ -241,6 +241,7 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
       APRT_TRY(r.num(rp, "source.replay", "rate_hz", 0, 1000, &c.source.replay.rate_hz));
     }
     APRT_TRY(r.boolean(rp, "source.replay", "loop", &c.source.replay.loop));
+    APRT_TRY(r.integer(rp, "source.replay", "frames", 0, 1000000000, &c.source.replay.frames));
     const Node* v = src ? src->get("v4l2") : nullptr;
     APRT_TRY(r.map(v, "source.v4l2", {"device", "width", "height", "format", "fps", "buffers"}));
     APRT_TRY(r.str(v, "source.v4l2", "device", &c.source.v4l2.device));

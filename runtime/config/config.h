@@ -34,6 +34,7 @@ struct Config {
       double rate_hz = 10.0;  // 0: as fast as inference takes frames; "recorded": times.txt
       bool recorded = false;
       bool loop = false;
+      int frames = 0;  // stop after this many frames (0: the whole sequence, or forever with loop)
     } replay;
     struct V4l2 {
       std::string device = "/dev/video0";

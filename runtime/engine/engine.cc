@@ -12,6 +12,7 @@
 #include <ctime>
 #include <new>
 
+#include "kernels/common/cpu_features.h"
 #include "runtime/common/check.h"
 #include "runtime/engine/denormals.h"
 #include "runtime/engine/kernel_select.h"
@@ -191,6 +192,11 @@ Expected<size_t> Engine::memory_required(const uint8_t* data, size_t size) {
 
 Expected<std::unique_ptr<Engine>> Engine::load_memory(const uint8_t* data, size_t size,
                                                       const EngineOptions& options) {
+  if (const char* missing = kernels::missing_build_feature())
+    return Error(Errc::kUnsupported,
+                 "engine: this build assumes %s (compiled with -march=...), which this CPU does "
+                 "not report; rebuild for the target's baseline (docs/architecture.md)",
+                 missing);
   // Pass 1 on the caller's bytes: validate everything (checksums included) and size.
   auto checked =
       ModelFile::parse(data, size, ParseOptions{.verify_checksums = options.verify_checksums});

@@ -88,7 +88,7 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
   kernels::PixelFormat format = kernels::PixelFormat::kRgb24;
   if (config.source.type == "replay") {
     ReplayPacing pacing{config.source.replay.rate_hz, config.source.replay.recorded,
-                        config.source.replay.loop};
+                        config.source.replay.loop, uint64_t(config.source.replay.frames)};
     auto replay = ReplaySource::open(config.source.replay.path.c_str(), pacing);
     if (!replay) return replay.error();
     width = replay.value()->replay().width();

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <string>
 
 namespace aprt {
 namespace {
@@ -94,6 +95,26 @@ TEST(Config, RecordedRate) {
   auto c = parse_config("model: m\nsource: {replay: {path: d, rate_hz: recorded}}\n", "t");
   ASSERT_TRUE(c) << c.error().message();
   EXPECT_TRUE(c->source.replay.recorded);
+}
+
+TEST(Config, ReplayFrameLimit) {
+  auto c = parse_config("model: m\nsource: {replay: {path: d, frames: 40}}\n", "t");
+  ASSERT_TRUE(c) << c.error().message();
+  EXPECT_EQ(c->source.replay.frames, 40);
+  expect_refused("model: m\nsource: {replay: {path: d, frames: -1}}\n", "source.replay.frames");
+}
+
+// The files the repository and the package ship must stay valid as the schema grows.
+TEST(Config, ShippedConfigurationsParse) {
+  for (const char* name : {"config/default.yaml", "config/aprt.yaml"}) {
+    auto c = load_config(std::string(APRT_SOURCE_DIR) + "/" + name);
+    ASSERT_TRUE(c) << name << ": " << c.error().message();
+  }
+  auto ecu = load_config(std::string(APRT_SOURCE_DIR) + "/config/aprt.yaml");
+  EXPECT_EQ(ecu->source.type, "v4l2");
+  EXPECT_TRUE(ecu->output.can.enabled);
+  EXPECT_TRUE(ecu->output.dds.enabled);
+  EXPECT_EQ(ecu->model[0], '/');  // the service's working directory is not the data folder
 }
 
 TEST(Config, RefusesWithKeyPathAndLine) {

@@ -85,6 +85,17 @@ def cmd_train(a):
     cmd_convert(a)
 
 
+def cmd_plot_eval(a):
+    from .plot_eval import EvalCsvError, plot_eval
+
+    try:
+        plot_eval(a.csv, a.out, labels=a.labels.split(",") if a.labels else None, title=a.title)
+    except (EvalCsvError, OSError) as e:
+        print(f"plot-eval: {e}", file=sys.stderr)
+        sys.exit(2)
+    print(f"plot-eval: {a.out}")
+
+
 def cmd_preprocess_golden(a):
     from .preprocess_golden import write_cases
 
@@ -138,6 +149,13 @@ def main(argv=None):
     t.add_argument("--hidden", type=int, default=128, help="transformer width (d_model)")
     t.add_argument("--layers", type=int, default=3, help="encoder and decoder layers per branch")
     t.set_defaults(fn=cmd_train)
+
+    pe = sub.add_parser("plot-eval", help="trajectory and error plot from `aprt eval --csv` files")
+    pe.add_argument("csv", nargs="+", help="one or more CSV files (side by side)")
+    pe.add_argument("--out", required=True, help="PNG to write")
+    pe.add_argument("--labels", help="comma-separated panel titles (default: file names)")
+    pe.add_argument("--title")
+    pe.set_defaults(fn=cmd_plot_eval)
 
     pg = sub.add_parser("preprocess-golden", help="frames and expected inputs for the C++ tests")
     pg.add_argument("--out", required=True)

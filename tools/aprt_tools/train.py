@@ -95,7 +95,7 @@ def evaluate(model, imgs, pos, quat, lo, hi, batch=32):
 
 def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: int = 16,
           lr: float = 1e-4, seed: int = 1, threads: int = 2, hidden: int = 128, layers: int = 3,
-          log=print):
+          warmup_steps: int = 200, log=print):
     torch.manual_seed(seed)
     torch.set_num_threads(threads)
     os.makedirs(out, exist_ok=True)
@@ -128,13 +128,19 @@ def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: in
             frac = (time.time() - start) / budget
             if frac >= 1.0:
                 break
-            for g in opt.param_groups:  # constant, then cosine decay over the last half
-                g["lr"] = lr * (1.0 if frac < 0.5 else 0.5 * (1 + math.cos(math.pi * (frac - 0.5) / 0.5)))
+            # Linear warm-up (a from-scratch transformer with post-norm diverges at
+            # a high rate otherwise), constant, then cosine decay over the last 40 %.
+            scale = min(1.0, (step + 1) / warmup_steps)
+            if frac > 0.6:
+                scale *= 0.02 + 0.98 * 0.5 * (1 + math.cos(math.pi * (frac - 0.6) / 0.4))
+            for g in opt.param_groups:
+                g["lr"] = lr * scale
             idx = perm[b:b + batch]
             x = normalise(augment(imgs[idx].float() / 255.0, gen))
             loss, lp, lq = loss_fn(model(x), pos_n[idx], quat[idx])
             opt.zero_grad()
             loss.backward()
+            nn.utils.clip_grad_norm_(model.parameters(), 2.0)
             opt.step()
             step += 1
             if step % 50 == 0:
@@ -150,12 +156,22 @@ def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: in
         torch.save({"model_state_dict": model.state_dict(), "config": json.loads(cfg.to_json()),
                     "s_x": loss_fn.s_x.item(), "s_q": loss_fn.s_q.item()},
                    os.path.join(out, "checkpoint.pth"))
+        # Written every epoch: an interrupted run is still exportable
+        # (python3 -m aprt_tools export --config-json OUT/model.json --weights
+        # OUT/checkpoint.pth -o OUT/model.onnx, then convert).
+        _write_config(out, cfg, log_rows, start, tr, epoch, step, data)
+    _write_config(out, cfg, log_rows, start, tr, epoch, step, data)
     cfg.dropout = 0.0
-    cfg.extra = dict(val_error=[log_rows[-1]["val_pos_median"], log_rows[-1]["val_rot_median"]],
-                     train_minutes=(time.time() - start) / 60, train_frames=int(len(tr)),
-                     epochs=epoch, steps=step, data=os.path.abspath(data))
+    return model, cfg
+
+
+def _write_config(out, cfg, log_rows, start, tr, epoch, step, data):
+    final = AprConfig.from_json(cfg.to_json())
+    final.dropout = 0.0
+    final.extra = dict(val_error=[log_rows[-1]["val_pos_median"], log_rows[-1]["val_rot_median"]],
+                       train_minutes=(time.time() - start) / 60, train_frames=int(len(tr)),
+                       epochs=epoch, steps=step, data=os.path.basename(os.path.abspath(data)))
     with open(os.path.join(out, "model.json"), "w") as f:
-        f.write(cfg.to_json())
+        f.write(final.to_json())
     with open(os.path.join(out, "train_log.json"), "w") as f:
         json.dump(log_rows, f, indent=1)
-    return model, cfg
