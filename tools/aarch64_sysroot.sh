@@ -9,8 +9,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 root="$PWD/build/sysroot-aarch64"
 packages=(libyaml-0-2:arm64 libyaml-dev:arm64 libpng16-16:arm64 libpng-dev:arm64 zlib1g:arm64
-          zlib1g-dev:arm64 libjpeg62-turbo:arm64 libjpeg62-turbo-dev:arm64)
-[ -f "$root/.ready" ] && exit 0
+          zlib1g-dev:arm64 libjpeg62-turbo:arm64 libjpeg62-turbo-dev:arm64 libsodium23:arm64
+          libsodium-dev:arm64)
+# Ready when unpacked from this very package list (a changed list rebuilds it).
+[ "$(cat "$root/.ready" 2>/dev/null)" = "${packages[*]}" ] && exit 0
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 if ! dpkg --print-foreign-architectures | grep -qx arm64; then
@@ -27,5 +29,5 @@ for d in "$root"/debs/*.deb; do dpkg -x "$d" "$root"; done
 # Static linking: drop the shared objects so the linker takes the .a archives.
 find "$root/usr/lib/aarch64-linux-gnu" "$root/lib" -name '*.so*' -delete 2>/dev/null || true
 rm -rf "$root/debs"
-touch "$root/.ready"
+echo "${packages[*]}" >"$root/.ready"
 echo "aarch64 sysroot: $root"

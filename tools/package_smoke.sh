@@ -30,13 +30,16 @@ echo "== $(basename "$deb") $(du -h "$deb" | cut -f1), $(basename "$dev") $(du -
 
 field() { dpkg-deb -f "$1" "$2"; }
 [ "$(field "$deb" Architecture)" = "$arch" ] || fail "$deb: Architecture is not $arch"
-field "$deb" Depends | grep -q libyaml-0-2 || fail "$deb: Depends lacks libyaml-0-2"
+field "$deb" Depends | grep -q "libc6 (>= 2.36)" || fail "$deb: Depends lacks libc6"
+if [ "$arch" = amd64 ]; then
+  field "$deb" Depends | grep -q libyaml-0-2 || fail "$deb: Depends lacks libyaml-0-2"
+fi
 [ "$(field "$dev" Depends)" = "aprt (= $version)" ] || fail "$dev: Depends is not aprt (= $version)"
 dpkg-deb -I "$deb" conffiles | grep -qx /etc/aprt/aprt.yaml || fail "$deb: /etc/aprt/aprt.yaml is not a conffile"
 contents=$(dpkg-deb -c "$deb"; dpkg-deb -c "$dev")
 for path in ./usr/bin/aprt ./etc/aprt/aprt.yaml ./usr/lib/systemd/system/aprt.service \
   ./usr/share/aprt/config/default.yaml ./usr/share/aprt/config/aprt_pose.dbc \
-  ./usr/share/aprt/config/idl/ros2_interfaces.idl ./usr/share/aprt/model_bin/town_128.aprt \
+  ./usr/share/aprt/config/idl/ros2_interfaces.idl ./usr/share/aprt/model_bin/town_64.aprt \
   ./usr/share/aprt/data/demo_drive/poses.txt ./usr/include/aprt/runtime/engine/engine.h \
   ./usr/share/doc/aprt/README.md; do
   grep -q " $path\$" <<<"$contents" || fail "no $path in the packages"
@@ -53,7 +56,7 @@ if [ "$arch" = arm64 ]; then
   run=(env QEMU_CPU="${QEMU_CPU:-cortex-a72}" LD_LIBRARY_PATH="$sysroot_libs" qemu-aarch64 -L /usr/aarch64-linux-gnu)
 fi
 aprt=("${run[@]}" "$root/usr/bin/aprt")
-model=$root/usr/share/aprt/model_bin/town_128.aprt
+model=$root/usr/share/aprt/model_bin/town_64.aprt
 echo "== aprt run --check (the installed ECU configuration)"
 "${aprt[@]}" run --check --config "$root/etc/aprt/aprt.yaml" --model "$model"
 echo "== aprt info (the shipped model)"

@@ -10,10 +10,12 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   # tests, sanitizers, fuzzing, formatting
   libgtest-dev libgmock-dev libbenchmark-dev clang clang-format libclang-rt-14-dev
-  # runtime libraries: YAML configuration, PNG/JPEG replay, pose geometry, DDS
-  libyaml-dev libpng-dev libjpeg-dev libeigen3-dev cyclonedds-dev cyclonedds-tools
+  # runtime libraries: YAML configuration, PNG/JPEG replay, pose geometry, DDS, model signatures
+  libyaml-dev libpng-dev libjpeg-dev libeigen3-dev cyclonedds-dev cyclonedds-tools libsodium-dev
   # CAN tools (cansend/candump, for the HIL rig and by hand)
   can-utils
+  # worst-case timing runs under CPU load (docs/timing.md)
+  stress-ng
   # Python tools (Debian's interpreter at /usr/bin/python3); canmatrix is the
   # independent DBC parser of the tests
   python3 python3-numpy python3-torch python3-onnx python3-matplotlib python3-pil

@@ -10,8 +10,10 @@
 
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
+#include "runtime/common/allocation_counter.h"
 #include "runtime/config/config.h"
 #include "runtime/engine/engine.h"
+#include "runtime/loop/model_loader.h"
 #include "runtime/loop/runtime.h"
 
 namespace aprt::cli {
@@ -21,6 +23,10 @@ Runtime* g_runtime = nullptr;
 
 void on_signal(int) {
   if (g_runtime) g_runtime->request_stop();
+}
+
+void on_hangup(int) {
+  if (g_runtime) g_runtime->request_reload();
 }
 
 // Relative paths in a configuration are relative to `base`.
@@ -34,17 +40,13 @@ std::string resolve(const std::string& path, const std::string& base) {
 // model is loaded for real (checksums, op set, memory plan) with the
 // configured engine options.
 int check_only(const std::string& path, const Config& cfg) {
-  EngineOptions opts;
-  opts.threads = cfg.engine.threads;
-  opts.isa = cfg.engine.isa.c_str();
-  opts.cpus = cfg.engine.cpus.empty() ? nullptr : cfg.engine.cpus.data();
-  opts.n_cpus = int(cfg.engine.cpus.size());
-  opts.expect_modality = uint32_t(format::Modality::kImage);
-  auto engine = Engine::load_file(cfg.model.c_str(), opts);
+  std::string note;
+  auto engine = load_model(cfg, &note);
   if (!engine) {
     std::fprintf(stderr, "aprt run: %s: model: %s\n", path.c_str(), engine.error().message());
     return 2;
   }
+  if (!note.empty()) std::printf("aprt run: %s: %s\n", cfg.model.c_str(), note.c_str());
   std::printf("aprt run: %s: configuration valid; model %s loads (%s kernels, %zu bytes)\n",
               path.c_str(), cfg.model.c_str(), (*engine)->isa(), (*engine)->memory().total_bytes);
   return 0;
@@ -65,6 +67,10 @@ int cmd_run(int argc, char** argv) {
         "  --frames N      stop the replay after N frames\n"
         "  --threads N     engine threads\n"
         "  --quiet         no line per pose (summary only)\n"
+        "  --timing FILE   timing validation report: FILE (JSON: per-stage min/median/\n"
+        "                  p99/p99.9/max, misses, drops, allocations after the first\n"
+        "                  pose, RSS) and FILE with .csv (per-pose timestamps); plot\n"
+        "                  with python3 -m aprt_tools plot-timing FILE\n"
         "  --check         validate the configuration and load the model, then exit\n"
         "                  (0: both fine; no device is opened)\n",
         data_dir().c_str());
@@ -78,6 +84,7 @@ int cmd_run(int argc, char** argv) {
   const long frames = args.integer("--frames", 0, 1, 1000000000);
   const bool quiet = args.flag("--quiet");
   const bool check = args.flag("--check");
+  const char* timing = args.value("--timing");
   if (args.error() || args.leftover()) {
     std::fprintf(stderr, "aprt run: bad argument '%s' (see aprt run --help)\n",
                  args.error() ? args.error() : args.leftover());
@@ -96,6 +103,7 @@ int cmd_run(int argc, char** argv) {
     return slash == std::string::npos ? std::string(".") : p.substr(0, slash);
   }() : data_dir();
   cfg.model = resolve(model ? model : cfg.model, model ? "." : base);
+  cfg.model_signing.public_key = resolve(cfg.model_signing.public_key, base);
   if (replay) {
     cfg.source.type = "replay";
     cfg.source.replay.path = replay;
@@ -126,13 +134,24 @@ int cmd_run(int argc, char** argv) {
   sa.sa_handler = on_signal;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  struct sigaction hup {};
+  hup.sa_handler = on_hangup;
+  sigaction(SIGHUP, &hup, nullptr);
   const Engine& e = (*runtime)->engine();
   std::printf("aprt run: %s (%s kernels, %d thread%s) on %s\n", cfg.model.c_str(), e.isa(),
               e.threads(), e.threads() > 1 ? "s" : "",
               cfg.source.type == "replay" ? cfg.source.replay.path.c_str()
                                           : cfg.source.v4l2.device.c_str());
+  (*runtime)->set_allocation_counter(allocation_count, allocation_counter_covers_malloc());
   const int code = (*runtime)->run();
   g_runtime = nullptr;
+  if (timing) {
+    if (Status s = (*runtime)->write_timing_report(timing); !s) {
+      std::fprintf(stderr, "aprt run: %s\n", s.error().message());
+      return code ? code : 1;
+    }
+    std::printf("timing report: %s\n", timing);
+  }
   return code;
 }
 

@@ -21,6 +21,7 @@ void usage(FILE* out) {
                "  bench MODEL    latency and memory of a model on this machine\n"
                "  eval           errors of a model on a labelled sequence\n"
                "  candump        decode aprt's pose frames from CAN (the receiver's view)\n"
+               "  sign           Ed25519 keys and model signatures (model_signing)\n"
                "\n"
                "Run 'aprt <command> --help' for the command's options.\n");
 }
@@ -67,6 +68,7 @@ int main(int argc, char** argv) {
   if (!std::strcmp(cmd, "bench")) return aprt::cli::cmd_bench(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "eval")) return aprt::cli::cmd_eval(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "candump")) return aprt::cli::cmd_candump(argc - 1, argv + 1);
+  if (!std::strcmp(cmd, "sign")) return aprt::cli::cmd_sign(argc - 1, argv + 1);
   std::fprintf(stderr, "aprt: unknown command '%s'\n", cmd);
   usage(stderr);
   return 2;

@@ -218,11 +218,15 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
   Status s;
 #define APRT_TRY(expr) \
   if (!(s = (expr))) return s.error()
-  APRT_TRY(r.map(
-      root, "",
-      {"model", "engine", "source", "output", "extrinsics", "supervisor", "sanity", "threads"}));
+  APRT_TRY(r.map(root, "",
+                 {"model", "model_signing", "engine", "source", "output", "extrinsics",
+                  "supervisor", "sanity", "threads"}));
   if (root && root->kind == Node::kMap) {
     APRT_TRY(r.str(root, "", "model", &c.model));
+    const Node* ms = root->get("model_signing");
+    APRT_TRY(r.map(ms, "model_signing", {"public_key", "required"}));
+    APRT_TRY(r.str(ms, "model_signing", "public_key", &c.model_signing.public_key));
+    APRT_TRY(r.boolean(ms, "model_signing", "required", &c.model_signing.required));
     const Node* e = root->get("engine");
     APRT_TRY(r.map(e, "engine", {"threads", "isa", "cpus"}));
     APRT_TRY(r.integer(e, "engine", "threads", 1, 16, &c.engine.threads));
@@ -340,6 +344,12 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
 #undef APRT_TRY
   if (c.model.empty()) {
     return Error(Errc::kInvalidArgument, "%s: 'model' (path of the .aprt file) is required",
+                 origin.c_str());
+  }
+  if (c.model_signing.required && c.model_signing.public_key.empty()) {
+    return Error(Errc::kInvalidArgument,
+                 "%s: model_signing.required needs model_signing.public_key (the key file made "
+                 "by `aprt sign keygen`)",
                  origin.c_str());
   }
   if (c.source.type == "replay" && c.source.replay.path.empty()) {

@@ -21,6 +21,12 @@ struct Config {
   std::string origin = "<defaults>";  // where it came from, for messages
   std::string model;
 
+  // Ed25519 signatures over model files (runtime/loop/model_signature.h).
+  struct ModelSigning {
+    std::string public_key;  // key file from `aprt sign keygen`; empty: signatures not checked
+    bool required = false;   // true: an unsigned or wrongly signed model is refused
+  } model_signing;
+
   struct Engine {
     int threads = 1;
     std::string isa = "auto";

@@ -284,8 +284,7 @@ Expected<std::unique_ptr<Engine>> Engine::load_memory(const uint8_t* data, size_
   return e;
 }
 
-Expected<std::unique_ptr<Engine>> Engine::load_file(const char* path,
-                                                    const EngineOptions& options) {
+Expected<std::vector<uint8_t>> Engine::read_model_file(const char* path) {
   const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
   APRT_ENSURE(fd >= 0, Errc::kIo, "model_bin: cannot open '%s': %s", path, std::strerror(errno));
   struct stat st {};
@@ -310,7 +309,14 @@ Expected<std::unique_ptr<Engine>> Engine::load_file(const char* path,
   ::close(fd);
   APRT_ENSURE(got == bytes.size(), Errc::kIo, "model_bin: short read on '%s' (%zu of %zu bytes)",
               path, got, bytes.size());
-  auto e = load_memory(bytes.data(), bytes.size(), options);
+  return bytes;
+}
+
+Expected<std::unique_ptr<Engine>> Engine::load_file(const char* path,
+                                                    const EngineOptions& options) {
+  auto bytes = read_model_file(path);
+  if (!bytes) return bytes.error();
+  auto e = load_memory(bytes->data(), bytes->size(), options);
   if (!e) {
     Error err = e.error();
     err.with_context("%s", path);

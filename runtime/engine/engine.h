@@ -69,6 +69,9 @@ class Engine {
                                                      const EngineOptions& options = {});
   static Expected<std::unique_ptr<Engine>> load_memory(const uint8_t* data, size_t size,
                                                        const EngineOptions& options = {});
+  // A model file's bytes (size-checked, fully read), for callers that check
+  // them (a signature) before load_memory().
+  static Expected<std::vector<uint8_t>> read_model_file(const char* path);
   // Bytes load_memory() needs for EngineOptions::memory.
   static Expected<size_t> memory_required(const uint8_t* data, size_t size);
 

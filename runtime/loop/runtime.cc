@@ -19,6 +19,7 @@
 
 #include "drivers/camera/v4l2_source.h"
 #include "drivers/replay/replay_source.h"
+#include "runtime/loop/model_loader.h"
 
 namespace aprt {
 namespace {
@@ -73,14 +74,10 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
   if (!r) return Error(Errc::kOutOfMemory, "run: out of memory");
   r->config_ = config;
   r->supervisor_ = Supervisor(config.supervisor);
-  EngineOptions eo;
-  eo.threads = config.engine.threads;
-  eo.isa = config.engine.isa.c_str();
-  eo.cpus = config.engine.cpus.empty() ? nullptr : config.engine.cpus.data();
-  eo.n_cpus = int(config.engine.cpus.size());
-  eo.expect_modality = uint32_t(format::Modality::kImage);
-  auto engine = Engine::load_file(config.model.c_str(), eo);
+  std::string note;
+  auto engine = load_model(config, &note);
   if (!engine) return engine.error();
+  if (!note.empty()) std::fprintf(stderr, "aprt run: %s: %s\n", config.model.c_str(), note.c_str());
   r->engine_ = std::move(engine.value());
 
   int width = 0, height = 0;
@@ -258,8 +255,7 @@ void Runtime::capture_loop() {
 }
 
 void Runtime::inference_loop() {
-  Engine& e = *engine_;
-  const ModelMeta& m = e.meta();
+  Engine* e = engine_.get();
   const int64_t stale_ns = int64_t(config_.supervisor.frame_timeout_ms * 1e6);
   const int64_t deadline_ns = int64_t(config_.supervisor.inference_deadline_ms * 1e6);
   auto* replay =
@@ -281,6 +277,13 @@ void Runtime::inference_loop() {
       }
     }
     if (replay) replay->note_taken(f->info.sequence + 1);
+    // A reloaded model takes over here, between two frames; the old one goes
+    // back to the supervisor, which frees it (never this thread).
+    if (Engine* next = pending_.exchange(nullptr, std::memory_order_acq_rel)) {
+      retired_.store(e, std::memory_order_release);
+      e = next;
+    }
+    const ModelMeta& m = e->meta();
     PoseRecord rec;
     rec.inference_start_ns = monotonic_ns();
     rec.capture_ns = f->info.capture_ns;
@@ -296,9 +299,9 @@ void Runtime::inference_loop() {
         continue;
       }
     }
-    kernels::preprocess_image(*plan_, f->view(), e.input().f32());
-    (void)e.run();
-    rec.pose = decode_pose(e.output().f32(), m, float(config_.sanity.bounds_margin));
+    kernels::preprocess_image(*plan_, f->view(), e->input().f32());
+    (void)e->run();
+    rec.pose = decode_pose(e->output().f32(), m, float(config_.sanity.bounds_margin));
     rec.inference_end_ns = monotonic_ns();
     flags |= rec.pose.flags;
     if (rec.inference_end_ns - rec.inference_start_ns > deadline_ns) {
@@ -400,6 +403,7 @@ void Runtime::publish_loop() {
     if (timing_count_ < timings_.size()) {
       timings_[timing_count_++] = {r.capture_ns, r.inference_start_ns, r.inference_end_ns, now};
     }
+    published_.fetch_add(1, std::memory_order_release);
     if (r.has_truth && pos_errors_.size() < pos_errors_.capacity()) {
       double d = 0;
       for (int k = 0; k < 3; ++k) {
@@ -491,6 +495,10 @@ int Runtime::run() {
     h.end_of_stream = capture_done && inference_done && ring_->size() == 0;
     if (capture_done && h.last_frame_ns)
       h.last_frame_ns = h.now_ns;  // a finished replay is not stale
+    if (!steady_.valid && published_.load(std::memory_order_acquire) > 0) {
+      steady_ = {true, allocation_count_ ? allocation_count_() : 0, current_rss_kb()};
+    }
+    service_reload();
     const RunState st = supervisor_.step(h);
     state_.store(uint8_t(st), std::memory_order_relaxed);
     reason_.store(supervisor_.reason(), std::memory_order_release);
@@ -519,6 +527,11 @@ int Runtime::run() {
     if (threads_started_[i]) pthread_join(*ts[i], nullptr);
     threads_started_[i] = false;
   }
+  end_ = {true, allocation_count_ ? allocation_count_() : 0, current_rss_kb()};
+  // A reload the inference thread did not reach, or reached after the last tick.
+  service_reload();
+  if (pending_.exchange(nullptr)) spare_.reset();
+  duration_s_ = double(monotonic_ns() - started_ns_) * 1e-9;
   if (config_.supervisor.systemd) sd_notify_text("STOPPING=1");
   if (watchdog_fd_ >= 0 && code == 0) {
     if (write(watchdog_fd_, "V", 1) != 1) {  // magic close: a clean stop does not reset the ECU
@@ -532,11 +545,62 @@ int Runtime::run() {
   stats_.poses_flagged = poses_flagged_.load();
   stats_.deadline_misses = deadline_misses_.load();
   stats_.ring_full = ring_full_.load();
+  stats_.reloads = reloads_;
+  stats_.reloads_refused = reloads_refused_;
   if (config_.output.summary) {
     print_summary();
     outputs_->print_summary();
   }
   return code;
+}
+
+void Runtime::service_reload() {
+  if (retired_.exchange(nullptr, std::memory_order_acq_rel)) {
+    engine_.swap(spare_);  // engine_: the model now running; spare_: the old one
+    spare_.reset();
+    ++reloads_;
+    std::fprintf(stderr, "aprt run: model reloaded: %s (%s kernels); reload %llu\n",
+                 config_.model.c_str(), engine_->isa(), static_cast<unsigned long long>(reloads_));
+  }
+  if (!reload_requested_.exchange(false, std::memory_order_acq_rel)) return;
+  if (spare_) {
+    std::fprintf(stderr, "aprt run: reload requested while one is switching; ignored\n");
+    return;
+  }
+  std::string note;
+  auto next = load_model(config_, &note);
+  Status fits = next ? reload_compatible(engine_->meta(), next.value()->meta()) : ok();
+  if (!next || !fits) {
+    ++reloads_refused_;
+    std::fprintf(stderr, "aprt run: reload refused, the running model stays: %s\n",
+                 next ? fits.error().message() : next.error().message());
+    return;
+  }
+  if (!note.empty())
+    std::fprintf(stderr, "aprt run: %s: %s\n", config_.model.c_str(), note.c_str());
+  spare_ = std::move(next.value());
+  pending_.store(spare_.get(), std::memory_order_release);
+}
+
+Status Runtime::write_timing_report(const char* json_path) const {
+  TimingContext ctx;
+  ctx.model = config_.model.c_str();
+  const bool replay = config_.source.type == "replay";
+  ctx.source = replay ? config_.source.replay.path.c_str() : config_.source.v4l2.device.c_str();
+  ctx.isa = engine_->isa();
+  ctx.threads = engine_->threads();
+  const double hz = replay ? (config_.source.replay.recorded ? 0 : config_.source.replay.rate_hz)
+                           : double(config_.source.v4l2.fps);
+  ctx.camera_period_ms = hz > 0 ? 1000.0 / hz : 0;
+  ctx.inference_deadline_ms = config_.supervisor.inference_deadline_ms;
+  ctx.allocations_counted = allocation_count_ != nullptr;
+  ctx.counter_covers_malloc = counter_covers_malloc_;
+  ctx.steady = steady_;
+  ctx.end = end_;
+  // getrusage's peak is updated lazily by the kernel; never below what statm saw.
+  ctx.peak_rss_kb = std::max(peak_rss_kb(), end_.rss_kb);
+  ctx.duration_s = duration_s_;
+  return aprt::write_timing_report(json_path, timings_.data(), timing_count_, stats_, ctx);
 }
 
 }  // namespace aprt

@@ -28,6 +28,7 @@
 #include "runtime/loop/pose_record.h"
 #include "runtime/loop/spsc_ring.h"
 #include "runtime/loop/supervisor.h"
+#include "runtime/loop/timing_report.h"
 
 namespace aprt {
 
@@ -40,6 +41,7 @@ struct RunStats {
   uint64_t frames_captured = 0, frames_skipped = 0, frames_dropped = 0;
   uint64_t poses = 0, poses_flagged = 0, deadline_misses = 0, ring_full = 0;
   uint64_t source_restarts = 0;
+  uint64_t reloads = 0, reloads_refused = 0;
 };
 
 class Runtime {
@@ -52,6 +54,11 @@ class Runtime {
   int run();
   // Async-signal-safe.
   void request_stop() { stop_.store(true, std::memory_order_release); }
+  // Async-signal-safe (SIGHUP): the supervisor reloads the configured model
+  // file into a second engine, checks it (signature, file, fit) and the
+  // inference thread switches to it between two frames; a bad file leaves the
+  // running model in place, with the reason on stderr.
+  void request_reload() { reload_requested_.store(true, std::memory_order_release); }
 
   const RunStats& stats() const { return stats_; }
   const Engine& engine() const { return *engine_; }
@@ -61,6 +68,15 @@ class Runtime {
     *count = timing_count_;
     return timings_.data();
   }
+  // The process's allocation counter (allocation_counter.h), if the program
+  // links one: sampled after the first published pose and at the end, for
+  // the timing report's "allocations after start".
+  void set_allocation_counter(uint64_t (*count)() noexcept, bool covers_malloc) {
+    allocation_count_ = count;
+    counter_covers_malloc_ = covers_malloc;
+  }
+  // After run(): the timing validation report (timing_report.h).
+  Status write_timing_report(const char* json_path) const;
 
  private:
   Runtime() = default;
@@ -72,10 +88,16 @@ class Runtime {
   void publish_loop();
   void print_pose(const PoseRecord& r);
   void print_summary();
+  void service_reload();  // supervisor thread
   Status start_thread(pthread_t* t, void* (*fn)(void*), const ThreadConfig& tc, const char* name);
 
   Config config_;
-  std::unique_ptr<Engine> engine_;
+  std::unique_ptr<Engine> engine_;  // the model inference runs (owned by the supervisor side)
+  std::unique_ptr<Engine> spare_;   // a reloaded model, until inference has switched to it
+  std::atomic<Engine*> pending_{nullptr};  // supervisor -> inference: switch to this
+  std::atomic<Engine*> retired_{nullptr};  // inference -> supervisor: no longer used
+  std::atomic<bool> reload_requested_{false};
+  uint64_t reloads_ = 0, reloads_refused_ = 0;
   std::unique_ptr<FrameSource> source_;
   std::unique_ptr<FrameSlot> slot_;
   std::unique_ptr<kernels::PreprocessPlan> plan_;
@@ -95,6 +117,11 @@ class Runtime {
   std::atomic<const char*> reason_{"starting"};  // static strings of the supervisor
   std::atomic<uint64_t> frames_captured_{0}, frames_skipped_{0}, ring_full_{0};
   std::atomic<uint64_t> poses_flagged_{0}, deadline_misses_{0};
+  std::atomic<uint64_t> published_{0};
+  uint64_t (*allocation_count_)() noexcept = nullptr;
+  bool counter_covers_malloc_ = false;
+  MemorySample steady_, end_;
+  double duration_s_ = 0;
 
   pthread_t capture_{}, inference_{}, publish_{};
   bool threads_started_[3] = {};

@@ -96,6 +96,17 @@ def cmd_plot_eval(a):
     print(f"plot-eval: {a.out}")
 
 
+def cmd_plot_timing(a):
+    from .plot_timing import TimingReportError, plot_timing
+
+    try:
+        plot_timing(a.report, a.out)
+    except (TimingReportError, OSError, KeyError) as e:
+        print(f"plot-timing: {e}", file=sys.stderr)
+        sys.exit(2)
+    print(f"plot-timing: {a.out}")
+
+
 def cmd_preprocess_golden(a):
     from .preprocess_golden import write_cases
 
@@ -156,6 +167,11 @@ def main(argv=None):
     pe.add_argument("--labels", help="comma-separated panel titles (default: file names)")
     pe.add_argument("--title")
     pe.set_defaults(fn=cmd_plot_eval)
+
+    pt = sub.add_parser("plot-timing", help="latency histogram and time series of `aprt run --timing`")
+    pt.add_argument("report", help="the JSON report (its .csv beside it)")
+    pt.add_argument("--out", required=True, help="PNG to write")
+    pt.set_defaults(fn=cmd_plot_timing)
 
     pg = sub.add_parser("preprocess-golden", help="frames and expected inputs for the C++ tests")
     pg.add_argument("--out", required=True)

@@ -1,0 +1,81 @@
+#include "runtime/loop/model_loader.h"
+
+#include <unistd.h>
+
+#include "runtime/loop/model_signature.h"
+
+namespace aprt {
+
+EngineOptions engine_options(const Config& config) {
+  EngineOptions eo;
+  eo.threads = config.engine.threads;
+  eo.isa = config.engine.isa.c_str();
+  eo.cpus = config.engine.cpus.empty() ? nullptr : config.engine.cpus.data();
+  eo.n_cpus = int(config.engine.cpus.size());
+  eo.expect_modality = uint32_t(format::Modality::kImage);
+  return eo;
+}
+
+Expected<std::unique_ptr<Engine>> load_model(const Config& config, std::string* note) {
+  const char* path = config.model.c_str();
+  auto bytes = Engine::read_model_file(path);
+  if (!bytes) return bytes.error();
+  const Config::ModelSigning& ms = config.model_signing;
+  if (!ms.public_key.empty()) {
+    const std::string sig = signature_path(config.model);
+    const bool has_sig = access(sig.c_str(), F_OK) == 0;
+    if (!has_sig && ms.required) {
+      return Error(Errc::kInvalidArgument,
+                   "model: '%s' has no signature (%s) and model_signing.required is set; sign it "
+                   "with `aprt sign %s --key KEY.key`",
+                   path, sig.c_str(), path);
+    }
+    if (has_sig) {
+      auto key = read_public_key(ms.public_key);
+      if (!key) return key.error();
+      if (Status s = verify_signature(bytes->data(), bytes->size(), sig, *key); !s) {
+        Error e = s.error();
+        e.with_context("model '%s'", path);
+        return e;
+      }
+      if (note) *note = "signature verified (" + sig + ")";
+    } else if (note) {
+      *note = "warning: no signature (" + sig + "); model_signing.required is off";
+    }
+  }
+  auto e = Engine::load_memory(bytes->data(), bytes->size(), engine_options(config));
+  if (!e) {
+    Error err = e.error();
+    err.with_context("%s", path);
+    return err;
+  }
+  return e;
+}
+
+Status reload_compatible(const ModelMeta& running, const ModelMeta& next) {
+  for (int i = 0; i < 4; ++i) {
+    if (running.input_shape[i] != next.input_shape[i]) {
+      return Error(Errc::kInvalidArgument,
+                   "reload: the new model takes %ux%ux%u input, the running one %ux%ux%u; "
+                   "restart aprt to change the input",
+                   unsigned(next.input_shape[1]), unsigned(next.input_shape[2]),
+                   unsigned(next.input_shape[3]), unsigned(running.input_shape[1]),
+                   unsigned(running.input_shape[2]), unsigned(running.input_shape[3]));
+    }
+  }
+  if (running.norm_channels != next.norm_channels) {
+    return Error(Errc::kInvalidArgument, "reload: the new model normalises %d channels, not %d",
+                 next.norm_channels, running.norm_channels);
+  }
+  for (int c = 0; c < running.norm_channels; ++c) {
+    if (running.norm_mean[c] != next.norm_mean[c] || running.norm_std[c] != next.norm_std[c]) {
+      return Error(Errc::kInvalidArgument,
+                   "reload: the new model normalises its input differently (channel %d mean/std); "
+                   "restart aprt to change the preprocessing",
+                   c);
+    }
+  }
+  return ok();
+}
+
+}  // namespace aprt

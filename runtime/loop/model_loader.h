@@ -1,0 +1,26 @@
+// Loading the configured model for the loop, at start and on a reload:
+// reads the file once, checks its signature when the configuration asks
+// (model_signature.h) on exactly the bytes it then loads, and builds the
+// engine with the configured options. A reload also checks that the new
+// model fits the running pipeline (same input and normalisation: the
+// preprocessing plan and the frame source stay as they are).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "runtime/common/expected.h"
+#include "runtime/config/config.h"
+#include "runtime/engine/engine.h"
+
+namespace aprt {
+
+EngineOptions engine_options(const Config& config);
+
+// `note` receives a line for the log when a signature was checked or skipped.
+Expected<std::unique_ptr<Engine>> load_model(const Config& config, std::string* note);
+
+// ok() when `next` can replace `running` between two frames.
+Status reload_compatible(const ModelMeta& running, const ModelMeta& next);
+
+}  // namespace aprt
