@@ -12,6 +12,8 @@
 #include <cstring>
 #include <new>
 
+#include "drivers/replay/image_decoder.h"
+
 namespace aprt {
 namespace {
 
@@ -27,6 +29,8 @@ constexpr FormatName kFormats[] = {
     {"NV12", V4L2_PIX_FMT_NV12, kernels::PixelFormat::kNv12},
     {"RGB24", V4L2_PIX_FMT_RGB24, kernels::PixelFormat::kRgb24},
     {"BGR24", V4L2_PIX_FMT_BGR24, kernels::PixelFormat::kBgr24},
+    // Decoded on the capture thread into the slot as RGB24 (libjpeg-turbo).
+    {"MJPEG", V4L2_PIX_FMT_MJPEG, kernels::PixelFormat::kRgb24},
 };
 
 // ioctl, retried on EINTR.
@@ -59,8 +63,7 @@ Expected<std::unique_ptr<V4l2Source>> V4l2Source::create(const V4l2Options& o) {
   }
   if (!known) {
     return Error(Errc::kUnsupported,
-                 "v4l2: pixel format '%s' is not supported (YUYV, UYVY, NV12, RGB24, BGR24; MJPEG "
-                 "decoding is not implemented yet)",
+                 "v4l2: pixel format '%s' is not supported (YUYV, UYVY, NV12, RGB24, BGR24, MJPEG)",
                  o.format.c_str());
   }
   if (o.buffers < 2 || o.buffers > kMaxBuffers) {
@@ -70,6 +73,12 @@ Expected<std::unique_ptr<V4l2Source>> V4l2Source::create(const V4l2Options& o) {
   // The slot is sized for the configured frame; a device that insists on a
   // larger one is refused at start() (the slot cannot grow after start-up).
   s->max_bytes_ = kernels::frame_bytes(s->format_, o.width, o.height) + 4096;
+  if (s->fourcc_ == V4L2_PIX_FMT_MJPEG) {
+    // No file buffer and no PNG arena: only the JPEG decompressor is used.
+    auto d = ImageDecoder::create(1, 4096);
+    if (!d) return d.error();
+    s->decoder_ = std::move(d.value());
+  }
   s->retry_delay_ns_ = o.retry_ns;
   return s;
 }
@@ -88,6 +97,22 @@ void V4l2Source::close_device() {
   mapped_ = 0;
   if (fd_ >= 0) close(fd_);
   fd_ = -1;
+}
+
+void V4l2Source::fill_info(FrameBuffer* dst, const v4l2_buffer& b, size_t bytes) {
+  FrameInfo& f = dst->info;
+  f = FrameInfo{};
+  f.sequence = sequence_++;
+  f.capture_ns = int64_t(b.timestamp.tv_sec) * 1000000000 + int64_t(b.timestamp.tv_usec) * 1000;
+  if (!(b.flags & V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC) || f.capture_ns == 0) {
+    f.capture_ns = monotonic_ns();
+  }
+  f.width = width_;
+  f.height = height_;
+  f.format = format_;
+  f.stride = stride_;
+  f.bytes = bytes;
+  std::snprintf(f.name, sizeof f.name, "%s#%u", o_.device.c_str(), b.sequence);
 }
 
 Status V4l2Source::open_device() {
@@ -134,6 +159,7 @@ Status V4l2Source::open_device() {
   height_ = int(fmt.fmt.pix.height);
   stride_ =
       fmt.fmt.pix.bytesperline ? fmt.fmt.pix.bytesperline : kernels::min_stride(format_, width_);
+  if (decoder_) stride_ = kernels::min_stride(format_, width_);  // the decoded RGB rows
   const size_t need = format_ == kernels::PixelFormat::kNv12 ? stride_ * size_t(height_) * 3 / 2
                                                              : stride_ * size_t(height_);
   if (need > max_bytes_) {
@@ -243,25 +269,31 @@ SourceResult V4l2Source::next(FrameBuffer* dst, int64_t timeout_ns) {
     error_ = Error(Errc::kIo, "v4l2: %s: the driver marked frame %u corrupt", o_.device.c_str(),
                    b.sequence);
     result = SourceResult::kSkipped;
+  } else if (decoder_) {
+    // MJPEG: the buffer holds one JPEG of bytesused bytes; decode into the slot.
+    char what[96];
+    std::snprintf(what, sizeof what, "%s frame %u (MJPEG)", o_.device.c_str(), b.sequence);
+    auto img = b.index < uint32_t(mapped_) && b.bytesused <= lengths_[b.index]
+                   ? decoder_->decode_jpeg_memory(static_cast<const uint8_t*>(maps_[b.index]),
+                                                  b.bytesused, dst->data, dst->capacity, what)
+                   : Expected<DecodedImage>(Error(Errc::kTruncated, "v4l2: %s: bad buffer", what));
+    if (!img) {
+      error_ = img.error();
+      result = SourceResult::kSkipped;
+    } else if (img->width != width_ || img->height != height_) {
+      error_ = Error(Errc::kInvalidArgument, "v4l2: %s is %dx%d, the stream %dx%d", what,
+                     img->width, img->height, width_, height_);
+      result = SourceResult::kSkipped;
+    } else {
+      fill_info(dst, b, expect);
+    }
   } else if (b.bytesused < expect || b.index >= uint32_t(mapped_) || expect > dst->capacity) {
     error_ = Error(Errc::kTruncated, "v4l2: %s: frame %u truncated (%u of %zu bytes)",
                    o_.device.c_str(), b.sequence, b.bytesused, expect);
     result = SourceResult::kSkipped;
   } else {
     std::memcpy(dst->data, maps_[b.index], expect);
-    FrameInfo& f = dst->info;
-    f = FrameInfo{};
-    f.sequence = sequence_++;
-    f.capture_ns = int64_t(b.timestamp.tv_sec) * 1000000000 + int64_t(b.timestamp.tv_usec) * 1000;
-    if (!(b.flags & V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC) || f.capture_ns == 0) {
-      f.capture_ns = monotonic_ns();
-    }
-    f.width = width_;
-    f.height = height_;
-    f.format = format_;
-    f.stride = stride_;
-    f.bytes = expect;
-    std::snprintf(f.name, sizeof f.name, "%s#%u", o_.device.c_str(), b.sequence);
+    fill_info(dst, b, expect);
   }
   if (xioctl(fd_, VIDIOC_QBUF, &b) != 0) {
     error_ = Error(Errc::kIo, "v4l2: %s: QBUF: %s", o_.device.c_str(), std::strerror(errno));

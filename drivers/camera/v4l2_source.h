@@ -12,13 +12,16 @@
 #include <string>
 
 #include "drivers/frame/frame_source.h"
+#include "drivers/replay/image_decoder.h"
+
+struct v4l2_buffer;
 
 namespace aprt {
 
 struct V4l2Options {
   std::string device = "/dev/video0";
   int width = 640, height = 480;
-  std::string format = "YUYV";  // YUYV UYVY NV12 RGB24 BGR24
+  std::string format = "YUYV";  // YUYV UYVY NV12 RGB24 BGR24 MJPEG (decoded to RGB24)
   int fps = 30;
   int buffers = 4;
   int64_t retry_ns = 1000000000;  // first reopen delay; doubles up to 8x
@@ -50,6 +53,8 @@ class V4l2Source final : public FrameSource {
   V4l2Source() = default;
   Status open_device();
   void close_device();
+  void fill_info(FrameBuffer* dst, const v4l2_buffer& b, size_t bytes);
+  std::unique_ptr<ImageDecoder> decoder_;  // MJPEG only
   V4l2Options o_;
   uint32_t fourcc_ = 0;
   kernels::PixelFormat format_ = kernels::PixelFormat::kYuyv;

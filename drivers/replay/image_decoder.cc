@@ -24,6 +24,7 @@ struct ImageDecoder::Jpeg {
   jpeg_error_mgr err;
   jmp_buf jump;
   char message[JMSG_LENGTH_MAX];
+  int warnings;  // corrupt-data warnings of the current image
 };
 
 namespace {
@@ -34,7 +35,13 @@ void jpeg_error_exit(j_common_ptr cinfo) {
   longjmp(j->jump, 1);
 }
 
-void jpeg_silence(j_common_ptr, int) {}
+// libjpeg reports corrupt or truncated data as warnings (and fills the rest
+// of the image with grey); count them so the image is refused, not used.
+void jpeg_warning(j_common_ptr cinfo, int level) {
+  if (level >= 0) return;  // trace messages
+  auto* j = reinterpret_cast<ImageDecoder::Jpeg*>(cinfo->client_data);
+  if (j->warnings++ == 0) (*cinfo->err->format_message)(cinfo, j->message);
+}
 
 struct PngSource {
   const uint8_t* data;
@@ -85,7 +92,7 @@ Expected<std::unique_ptr<ImageDecoder>> ImageDecoder::create(size_t max_file_byt
   APRT_ENSURE(d->jpeg_ != nullptr, Errc::kOutOfMemory, "image decoder: out of memory");
   d->jpeg_->cinfo.err = jpeg_std_error(&d->jpeg_->err);
   d->jpeg_->err.error_exit = jpeg_error_exit;
-  d->jpeg_->err.emit_message = jpeg_silence;
+  d->jpeg_->err.emit_message = jpeg_warning;
   d->jpeg_->cinfo.client_data = d->jpeg_;
   jpeg_create_decompress(&d->jpeg_->cinfo);
   return d;
@@ -138,7 +145,7 @@ Expected<DecodedImage> ImageDecoder::decode(const char* path, uint8_t* out, size
   if (*n >= 8 && std::memcmp(file_, kPng, 8) == 0)
     return decode_png(path, *n, out, capacity, false);
   if (*n >= 3 && file_[0] == 0xFF && file_[1] == 0xD8 && file_[2] == 0xFF) {
-    return decode_jpeg(path, *n, out, capacity, false);
+    return decode_jpeg(path, file_, *n, out, capacity, false);
   }
   return Error(Errc::kUnsupported, "image: '%s' is neither PNG nor JPEG", path);
 }
@@ -149,7 +156,7 @@ Expected<DecodedImage> ImageDecoder::probe(const char* path) {
   static const uint8_t kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (*n >= 8 && std::memcmp(file_, kPng, 8) == 0) return decode_png(path, *n, nullptr, 0, true);
   if (*n >= 3 && file_[0] == 0xFF && file_[1] == 0xD8)
-    return decode_jpeg(path, *n, nullptr, 0, true);
+    return decode_jpeg(path, file_, *n, nullptr, 0, true);
   return Error(Errc::kUnsupported, "image: '%s' is neither PNG nor JPEG", path);
 }
 
@@ -202,15 +209,24 @@ Expected<DecodedImage> ImageDecoder::decode_png(const char* path, size_t n, uint
   return img;
 }
 
-Expected<DecodedImage> ImageDecoder::decode_jpeg(const char* path, size_t n, uint8_t* out,
-                                                 size_t capacity, bool header_only) {
+Expected<DecodedImage> ImageDecoder::decode_jpeg_memory(const uint8_t* data, size_t n, uint8_t* out,
+                                                        size_t capacity, const char* what) {
+  if (n < 4 || data[0] != 0xFF || data[1] != 0xD8) {
+    return Error(Errc::kBadHeader, "image: %s: not a JPEG (no SOI marker; %zu bytes)", what, n);
+  }
+  return decode_jpeg(what, data, n, out, capacity, false);
+}
+
+Expected<DecodedImage> ImageDecoder::decode_jpeg(const char* path, const uint8_t* data, size_t n,
+                                                 uint8_t* out, size_t capacity, bool header_only) {
   jpeg_decompress_struct& c = jpeg_->cinfo;
   DecodedImage img;
   if (setjmp(jpeg_->jump)) {
     jpeg_abort_decompress(&c);
     return Error(Errc::kBadHeader, "image: '%s': JPEG decode failed: %s", path, jpeg_->message);
   }
-  jpeg_mem_src(&c, file_, static_cast<unsigned long>(n));
+  jpeg_->warnings = 0;
+  jpeg_mem_src(&c, data, static_cast<unsigned long>(n));
   jpeg_read_header(&c, TRUE);
   c.out_color_space = JCS_RGB;
   img.width = int(c.image_width);
@@ -228,6 +244,10 @@ Expected<DecodedImage> ImageDecoder::decode_jpeg(const char* path, size_t n, uin
     jpeg_read_scanlines(&c, &row, 1);
   }
   jpeg_finish_decompress(&c);
+  if (jpeg_->warnings) {
+    return Error(Errc::kTruncated, "image: '%s': corrupt or truncated JPEG data (%s)", path,
+                 jpeg_->message);
+  }
   return img;
 }
 
@@ -257,6 +277,10 @@ Expected<DecodedImage> ImageDecoder::decode(const char* path, uint8_t*, size_t) 
 Expected<DecodedImage> ImageDecoder::probe(const char* path) {
   return Error(Errc::kUnsupported, "image decoder: cannot read '%s': this build has no PNG/JPEG",
                path);
+}
+Expected<DecodedImage> ImageDecoder::decode_jpeg_memory(const uint8_t*, size_t, uint8_t*, size_t,
+                                                        const char* what) {
+  return Error(Errc::kUnsupported, "image decoder: cannot decode %s: this build has no JPEG", what);
 }
 
 }  // namespace aprt

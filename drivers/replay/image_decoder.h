@@ -33,6 +33,10 @@ class ImageDecoder {
   Expected<DecodedImage> decode(const char* path, uint8_t* out, size_t capacity);
   // Width and height only (reads the header).
   Expected<DecodedImage> probe(const char* path);
+  // A JPEG already in memory (a camera's MJPEG frame) to RGB24 rows in
+  // out[capacity]; `what` names it in errors. No file buffer is used.
+  Expected<DecodedImage> decode_jpeg_memory(const uint8_t* data, size_t n, uint8_t* out,
+                                            size_t capacity, const char* what);
 
   // Arena bump allocator used by libpng (public for the C callbacks).
   void* arena_alloc(size_t n);
@@ -43,8 +47,8 @@ class ImageDecoder {
   Expected<size_t> read_file(const char* path);
   Expected<DecodedImage> decode_png(const char* path, size_t n, uint8_t* out, size_t capacity,
                                     bool header_only);
-  Expected<DecodedImage> decode_jpeg(const char* path, size_t n, uint8_t* out, size_t capacity,
-                                     bool header_only);
+  Expected<DecodedImage> decode_jpeg(const char* path, const uint8_t* data, size_t n, uint8_t* out,
+                                     size_t capacity, bool header_only);
 
   uint8_t* file_ = nullptr;
   size_t file_capacity_ = 0;

@@ -220,9 +220,41 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
   if (!(s = (expr))) return s.error()
   APRT_TRY(r.map(root, "",
                  {"model", "model_signing", "engine", "source", "output", "extrinsics",
-                  "supervisor", "sanity", "threads"}));
+                  "supervisor", "sanity", "threads", "fault_injection"}));
   if (root && root->kind == Node::kMap) {
     APRT_TRY(r.str(root, "", "model", &c.model));
+    if (const Node* fi = root->get("fault_injection"); fi && fi->kind != Node::kNull) {
+      if (fi->kind != Node::kSeq) return r.fail(fi, "fault_injection", "expected a list of faults");
+      if (fi->seq.size() > size_t(FaultInjector::kMaxFaults)) {
+        return r.fail(fi, "fault_injection",
+                      "at most " + std::to_string(FaultInjector::kMaxFaults) + " faults");
+      }
+      for (size_t i = 0; i < fi->seq.size(); ++i) {
+        const Node* f = fi->seq[i].get();
+        const std::string p = "fault_injection[" + std::to_string(i) + "]";
+        if (f->kind != Node::kMap) return r.fail(f, p, "expected a mapping");
+        APRT_TRY(r.map(f, p, {"fault", "at_frame", "count", "duration_ms"}));
+        std::string name;
+        APRT_TRY(r.str(f, p, "fault", &name,
+                       {"camera_stall", "inference_overrun", "nan_output", "publish_failure",
+                        "inference_hang"}));
+        FaultSpec spec;
+        if (!fault_kind_from_name(name, &spec.kind)) return r.fail(f, p + ".fault", "required");
+        int at = 0, count = 1;
+        APRT_TRY(r.integer(f, p, "at_frame", 0, 100000000, &at));
+        APRT_TRY(r.integer(f, p, "count", 1, 100000000, &count));
+        APRT_TRY(r.num(f, p, "duration_ms", 0, 600000, &spec.duration_ms));
+        spec.at_frame = uint64_t(at);
+        spec.count = uint64_t(count);
+        const bool timed = spec.kind == FaultKind::kCameraStall ||
+                           spec.kind == FaultKind::kInferenceOverrun ||
+                           spec.kind == FaultKind::kInferenceHang;
+        if (timed && spec.duration_ms <= 0) {
+          return r.fail(f, p + ".duration_ms", "required (> 0) for " + name);
+        }
+        c.fault_injection.push_back(spec);
+      }
+    }
     const Node* ms = root->get("model_signing");
     APRT_TRY(r.map(ms, "model_signing", {"public_key", "required"}));
     APRT_TRY(r.str(ms, "model_signing", "public_key", &c.model_signing.public_key));

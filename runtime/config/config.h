@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "runtime/common/expected.h"
+#include "runtime/loop/fault_injector.h"
 
 namespace aprt {
 
@@ -20,6 +21,9 @@ struct ThreadConfig {
 struct Config {
   std::string origin = "<defaults>";  // where it came from, for messages
   std::string model;
+
+  // Test rigs only: deliberate faults (runtime/loop/fault_injector.h).
+  std::vector<FaultSpec> fault_injection;
 
   // Ed25519 signatures over model files (runtime/loop/model_signature.h).
   struct ModelSigning {

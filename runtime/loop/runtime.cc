@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 
 #include "drivers/camera/v4l2_source.h"
 #include "drivers/replay/replay_source.h"
@@ -79,6 +80,11 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
   if (!engine) return engine.error();
   if (!note.empty()) std::fprintf(stderr, "aprt run: %s: %s\n", config.model.c_str(), note.c_str());
   r->engine_ = std::move(engine.value());
+  if (Status s = r->faults_.configure(config.fault_injection); !s) return s.error();
+  if (r->faults_.any()) {
+    std::fprintf(stderr, "aprt run: %zu deliberate fault(s) configured (fault_injection)\n",
+                 config.fault_injection.size());
+  }
 
   int width = 0, height = 0;
   size_t frames = 0;
@@ -233,7 +239,15 @@ void Runtime::capture_loop() {
           slot_->back().info.capture_ns = monotonic_ns();  // arrival, for frame age
         }
         slot_->publish();
-        frames_captured_.fetch_add(1, std::memory_order_relaxed);
+        if (const int64_t stall = faults_.stall_ns(frames_captured_.fetch_add(1))) {
+          // The camera delivers nothing; the thread stays alive and keeps beating.
+          const int64_t until = monotonic_ns() + stall;
+          while (!stop_.load(std::memory_order_acquire) && monotonic_ns() < until) {
+            const timespec ts{0, 5000000};
+            nanosleep(&ts, nullptr);
+            capture_beat_.store(monotonic_ns(), std::memory_order_release);
+          }
+        }
         if (source_failed_.exchange(false, std::memory_order_acq_rel)) {
           std::fprintf(stderr, "aprt run: %s delivers frames again\n", source_->name());
         }
@@ -299,8 +313,21 @@ void Runtime::inference_loop() {
         continue;
       }
     }
+    if (const int64_t hang = faults_.hang_ns(index)) {
+      // A hung stage: no beat, so the supervisor must see it (FAULT, watchdog unpetted).
+      const int64_t until = monotonic_ns() + hang;
+      while (!stop_.load(std::memory_order_acquire) && monotonic_ns() < until) {
+        const timespec ts{0, 5000000};
+        nanosleep(&ts, nullptr);
+      }
+    }
     kernels::preprocess_image(*plan_, f->view(), e->input().f32());
     (void)e->run();
+    if (const int64_t overrun = faults_.overrun_ns(index)) {
+      const timespec ts{time_t(overrun / 1000000000), long(overrun % 1000000000)};
+      nanosleep(&ts, nullptr);
+    }
+    if (faults_.nan_output(index)) e->output().f32()[0] = std::numeric_limits<float>::quiet_NaN();
     rec.pose = decode_pose(e->output().f32(), m, float(config_.sanity.bounds_margin));
     rec.inference_end_ns = monotonic_ns();
     flags |= rec.pose.flags;
@@ -398,7 +425,13 @@ void Runtime::publish_loop() {
     const int64_t now = monotonic_ns();
     if (config_.output.console) print_pose(r);
     // The frame's monotonic capture time in wall-clock time, for the stamps.
-    outputs_->publish(r, now, realtime_ns() - now);
+    if (faults_.publish_failure(r.index)) {
+      ++injected_publish_failures_;
+    } else {
+      outputs_->publish(r, now, realtime_ns() - now);
+    }
+    output_errors_.store(outputs_->stats().dds_errors + injected_publish_failures_,
+                         std::memory_order_release);
     last_inference_ms = double(r.inference_end_ns - r.inference_start_ns) * 1e-6;
     if (timing_count_ < timings_.size()) {
       timings_[timing_count_++] = {r.capture_ns, r.inference_start_ns, r.inference_end_ns, now};
@@ -492,6 +525,7 @@ int Runtime::run() {
     h.poses = poses_.load(std::memory_order_acquire);
     h.last_flags = last_flags_.load(std::memory_order_acquire);
     h.source_failed = source_failed_.load(std::memory_order_acquire);
+    h.output_errors = output_errors_.load(std::memory_order_acquire);
     h.end_of_stream = capture_done && inference_done && ring_->size() == 0;
     if (capture_done && h.last_frame_ns)
       h.last_frame_ns = h.now_ns;  // a finished replay is not stale
@@ -503,6 +537,9 @@ int Runtime::run() {
     state_.store(uint8_t(st), std::memory_order_relaxed);
     reason_.store(supervisor_.reason(), std::memory_order_release);
     if (st != last) {
+      if (state_change_count_ < kMaxStateChanges) {
+        state_changes_[state_change_count_++] = {st, supervisor_.reason(), h.now_ns};
+      }
       char msg[192];
       std::snprintf(msg, sizeof msg, "STATUS=%s: %s", run_state_name(st), supervisor_.reason());
       if (config_.supervisor.systemd) sd_notify_text(msg);
@@ -546,6 +583,7 @@ int Runtime::run() {
   stats_.deadline_misses = deadline_misses_.load();
   stats_.ring_full = ring_full_.load();
   stats_.reloads = reloads_;
+  stats_.publish_failures_injected = injected_publish_failures_;
   stats_.reloads_refused = reloads_refused_;
   if (config_.output.summary) {
     print_summary();

@@ -24,6 +24,7 @@
 #include "kernels/common/preprocess_image.h"
 #include "runtime/config/config.h"
 #include "runtime/engine/engine.h"
+#include "runtime/loop/fault_injector.h"
 #include "runtime/loop/pose_outputs.h"
 #include "runtime/loop/pose_record.h"
 #include "runtime/loop/spsc_ring.h"
@@ -37,11 +38,19 @@ struct TimingRecord {
   int64_t capture_ns, inference_start_ns, inference_end_ns, publish_ns;
 };
 
+// A state change as the supervisor made it (reason: a static string).
+struct StateChange {
+  RunState state;
+  const char* reason;
+  int64_t at_ns;
+};
+
 struct RunStats {
   uint64_t frames_captured = 0, frames_skipped = 0, frames_dropped = 0;
   uint64_t poses = 0, poses_flagged = 0, deadline_misses = 0, ring_full = 0;
   uint64_t source_restarts = 0;
   uint64_t reloads = 0, reloads_refused = 0;
+  uint64_t publish_failures_injected = 0;
 };
 
 class Runtime {
@@ -74,6 +83,12 @@ class Runtime {
   void set_allocation_counter(uint64_t (*count)() noexcept, bool covers_malloc) {
     allocation_count_ = count;
     counter_covers_malloc_ = covers_malloc;
+  }
+  // The first kMaxStateChanges state changes of the run, in order.
+  static constexpr size_t kMaxStateChanges = 64;
+  const StateChange* state_changes(size_t* count) const {
+    *count = state_change_count_;
+    return state_changes_;
   }
   // After run(): the timing validation report (timing_report.h).
   Status write_timing_report(const char* json_path) const;
@@ -118,6 +133,11 @@ class Runtime {
   std::atomic<uint64_t> frames_captured_{0}, frames_skipped_{0}, ring_full_{0};
   std::atomic<uint64_t> poses_flagged_{0}, deadline_misses_{0};
   std::atomic<uint64_t> published_{0};
+  std::atomic<uint64_t> output_errors_{0};
+  uint64_t injected_publish_failures_ = 0;  // publish thread; read after join
+  FaultInjector faults_;
+  StateChange state_changes_[kMaxStateChanges] = {};
+  size_t state_change_count_ = 0;
   uint64_t (*allocation_count_)() noexcept = nullptr;
   bool counter_covers_malloc_ = false;
   MemorySample steady_, end_;

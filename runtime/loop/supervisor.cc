@@ -37,6 +37,8 @@ RunState Supervisor::step(const Health& h) noexcept {
   }
   const int64_t timeout = int64_t(cfg_.frame_timeout_ms * 1e6);
   const char* problem = nullptr;
+  const bool outputs_failing = h.output_errors > output_errors_seen_;
+  output_errors_seen_ = h.output_errors;
   if (h.source_failed) {
     problem = "camera source failed (restarting)";
   } else if (h.last_frame_ns == 0) {
@@ -51,6 +53,8 @@ RunState Supervisor::step(const Health& h) noexcept {
     problem = "pose implausible (outside the map or a jump)";
   } else if (h.last_flags & kPoseStaleFrame) {
     problem = "frames arrive late";
+  } else if (outputs_failing) {
+    problem = "outputs failing (write errors)";
   }
   if (problem) {
     if (state_ != RunState::kDegraded) degraded_since_ns_ = h.now_ns;

@@ -17,7 +17,8 @@ struct Health {
   int64_t last_frame_ns = 0;  // arrival (monotonic) of the newest frame inference took; 0 = none
   int64_t capture_beat_ns = 0, inference_beat_ns = 0, publish_beat_ns = 0;
   uint64_t poses = 0;
-  uint32_t last_flags = 0;  // flags of the newest pose
+  uint32_t last_flags = 0;     // flags of the newest pose
+  uint64_t output_errors = 0;  // cumulative failed writes of the outputs (DDS, injected)
   bool source_failed = false;
   bool end_of_stream = false;
 };
@@ -39,6 +40,7 @@ class Supervisor {
   RunState state_ = RunState::kStarting;
   const char* reason_ = "starting";
   int64_t degraded_since_ns_ = 0;
+  uint64_t output_errors_seen_ = 0;
 };
 
 }  // namespace aprt

@@ -19,6 +19,7 @@
 #include <iterator>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "ros2_interfaces.h"
 #include "runtime/config/config.h"
@@ -153,6 +154,135 @@ TEST(RunLoop, RefusesCovarianceFromNowhere) {
   ASSERT_FALSE(rt);
   EXPECT_NE(std::string(rt.error().message()).find("output.sigma_position_m"), std::string::npos)
       << rt.error().message();
+}
+
+// The shipped model on the shipped demo drive: a trained model whose poses
+// pass the sanity checks, so a fault's effect is the only thing flagged.
+Config shipped_config() {
+  Config c;
+#ifdef APRT_SOURCE_DIR
+  const std::string root = APRT_SOURCE_DIR;
+  if (access((root + "/model_bin/town_64.aprt").c_str(), R_OK) != 0) return c;
+  c.model = root + "/model_bin/town_64.aprt";
+  c.source.replay.path = root + "/data/demo_drive";
+#else
+  return c;
+#endif
+  c.source.replay.rate_hz = 40;
+  c.source.replay.frames = 80;  // 2 s
+  c.output.console = false;
+  c.output.summary = false;
+  c.sanity.max_jump_m = 0;  // only the injected faults flag poses
+  c.sanity.bounds_margin = 1;
+  c.supervisor.rate_hz = 200;
+  c.supervisor.frame_timeout_ms = 300;
+  c.supervisor.inference_deadline_ms = 40;
+  c.supervisor.systemd = false;
+  c.threads.lock_memory = false;
+  return c;
+}
+
+// Runs `c` and returns the exit code and the reasons of the state changes, in order.
+int run_and_trace(const Config& c, std::vector<std::string>* trace, RunStats* stats,
+                  OutputStats* outputs = nullptr) {
+  auto rt = Runtime::create(c);
+  EXPECT_TRUE(rt) << rt.error().message();
+  if (!rt) return -1;
+  const int code = rt.value()->run();
+  size_t n = 0;
+  const StateChange* ch = rt.value()->state_changes(&n);
+  for (size_t i = 0; i < n; ++i) {
+    trace->push_back(std::string(run_state_name(ch[i].state)) + ": " + ch[i].reason);
+  }
+  *stats = rt.value()->stats();
+  if (outputs) *outputs = rt.value()->outputs().stats();
+  return code;
+}
+
+std::string joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const std::string& x : v) s += x + "; ";
+  return s;
+}
+
+// Position of `what` in the trace at or after `from`, or -1.
+int find_in(const std::vector<std::string>& trace, const std::string& what, int from = 0) {
+  for (int i = from; i < int(trace.size()); ++i) {
+    if (trace[size_t(i)] == what) return i;
+  }
+  return -1;
+}
+
+// Each injected fault: the state change it must cause, then recovery to RUNNING.
+TEST(FaultInjection, CameraStallDegradesAndRecovers) {
+  Config c = shipped_config();
+  if (c.model.empty()) GTEST_SKIP() << "no shipped model";
+  c.fault_injection.push_back({FaultKind::kCameraStall, 20, 1, 700});
+  std::vector<std::string> t;
+  RunStats st;
+  EXPECT_EQ(run_and_trace(c, &t, &st), 0);
+  const int d = find_in(t, "DEGRADED: frames stale (camera stalled?)");
+  EXPECT_GE(d, 0) << joined(t);
+  EXPECT_GE(find_in(t, "RUNNING: ok", d), 0) << joined(t);
+}
+
+TEST(FaultInjection, InferenceOverrunFlagsLatePosesAndRecovers) {
+  Config c = shipped_config();
+  if (c.model.empty()) GTEST_SKIP() << "no shipped model";
+  c.supervisor.inference_deadline_ms = 60;
+  c.fault_injection.push_back({FaultKind::kInferenceOverrun, 20, 3, 100});
+  std::vector<std::string> t;
+  RunStats st;
+  EXPECT_EQ(run_and_trace(c, &t, &st), 0);
+  EXPECT_GE(st.deadline_misses, 3u);
+  EXPECT_GE(st.poses_flagged, 3u);
+  const int d = find_in(t, "DEGRADED: inference deadline missed");
+  EXPECT_GE(d, 0) << joined(t);
+  EXPECT_GE(find_in(t, "RUNNING: ok", d), 0) << joined(t);
+}
+
+TEST(FaultInjection, NanOutputIsFlaggedWithheldAndRecovers) {
+  Config c = shipped_config();
+  if (c.model.empty()) GTEST_SKIP() << "no shipped model";
+  c.output.dds.enabled = true;
+  c.output.dds.loopback_only = true;
+  c.output.dds.domain = int(test_domain());
+  c.output.dds.pose_topic = "/aprt/fault_test/pose";
+  c.output.dds.diagnostics_topic = "/aprt/fault_test/diagnostics";
+  c.fault_injection.push_back({FaultKind::kNanOutput, 30, 4, 0});
+  std::vector<std::string> t;
+  RunStats st;
+  OutputStats o;
+  EXPECT_EQ(run_and_trace(c, &t, &st, &o), 0);
+  EXPECT_GE(st.poses_flagged, 4u);
+  EXPECT_GE(o.dds_withheld, 4u);  // never published as valid
+  EXPECT_EQ(o.dds_errors, 0u);
+  const int d = find_in(t, "DEGRADED: network output not sane");
+  EXPECT_GE(d, 0) << joined(t);
+  EXPECT_GE(find_in(t, "RUNNING: ok", d), 0) << joined(t);
+}
+
+TEST(FaultInjection, PublishFailureIsReportedAndRecovers) {
+  Config c = shipped_config();
+  if (c.model.empty()) GTEST_SKIP() << "no shipped model";
+  c.fault_injection.push_back({FaultKind::kPublishFailure, 25, 5, 0});
+  std::vector<std::string> t;
+  RunStats st;
+  EXPECT_EQ(run_and_trace(c, &t, &st), 0);
+  EXPECT_EQ(st.publish_failures_injected, 5u);
+  const int d = find_in(t, "DEGRADED: outputs failing (write errors)");
+  EXPECT_GE(d, 0) << joined(t);
+  EXPECT_GE(find_in(t, "RUNNING: ok", d), 0) << joined(t);
+}
+
+TEST(FaultInjection, HungInferenceIsAFault) {
+  Config c = shipped_config();
+  if (c.model.empty()) GTEST_SKIP() << "no shipped model";
+  c.fault_injection.push_back({FaultKind::kInferenceHang, 15, 1, 3000});
+  std::vector<std::string> t;
+  RunStats st;
+  EXPECT_EQ(run_and_trace(c, &t, &st), 3);  // FAULT: the exit code systemd restarts on
+  EXPECT_GE(find_in(t, "FAULT: a stage stopped beating (hung thread)"), 0) << joined(t);
 }
 
 std::string temp_dir() {

@@ -104,6 +104,30 @@ TEST(Config, ReplayFrameLimit) {
   expect_refused("model: m\nsource: {replay: {path: d, frames: -1}}\n", "source.replay.frames");
 }
 
+TEST(Config, FaultInjectionAndSigning) {
+  auto c = parse_config(
+      "model: m\nsource: {replay: {path: d}}\nfault_injection:\n"
+      "  - {fault: camera_stall, at_frame: 20, duration_ms: 700}\n"
+      "  - {fault: nan_output, at_frame: 3, count: 4}\n"
+      "model_signing: {public_key: k.pub, required: true}\n",
+      "t");
+  ASSERT_TRUE(c) << c.error().message();
+  ASSERT_EQ(c->fault_injection.size(), 2u);
+  EXPECT_EQ(c->fault_injection[0].kind, FaultKind::kCameraStall);
+  EXPECT_DOUBLE_EQ(c->fault_injection[0].duration_ms, 700);
+  EXPECT_EQ(c->fault_injection[1].count, 4u);
+  EXPECT_TRUE(c->model_signing.required);
+  expect_refused("model: m\nsource: {replay: {path: d}}\nfault_injection: [{fault: meteor}]\n",
+                 "fault_injection[0].fault: 'meteor' is not one of");
+  expect_refused(
+      "model: m\nsource: {replay: {path: d}}\nfault_injection: [{fault: camera_stall}]\n",
+      "fault_injection[0].duration_ms: required (> 0) for camera_stall");
+  expect_refused("model: m\nsource: {replay: {path: d}}\nfault_injection: {fault: x}\n",
+                 "expected a list of faults");
+  expect_refused("model: m\nsource: {replay: {path: d}}\nmodel_signing: {required: true}\n",
+                 "model_signing.required needs model_signing.public_key");
+}
+
 // The files the repository and the package ship must stay valid as the schema grows.
 TEST(Config, ShippedConfigurationsParse) {
   for (const char* name : {"config/default.yaml", "config/aprt.yaml"}) {

@@ -3,20 +3,30 @@
 // missing device retried with back-off without ever blocking past the timeout.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <vector>
 
+// jpeglib.h needs FILE and size_t declared first.
+#include <jpeglib.h>
+
 #include "drivers/camera/v4l2_source.h"
+#include "drivers/replay/image_decoder.h"
 
 namespace aprt {
 namespace {
 
 TEST(V4l2, RefusesWhatItCannotDeliver) {
   V4l2Options o;
-  o.format = "MJPEG";
+  o.format = "H264";
   auto a = V4l2Source::create(o);
   ASSERT_FALSE(a);
-  EXPECT_NE(std::strstr(a.error().message(), "MJPEG"), nullptr) << a.error().message();
+  EXPECT_NE(std::strstr(a.error().message(), "MJPEG"), nullptr) << a.error().message();  // listed
+  o.format = "MJPEG";
+  auto m = V4l2Source::create(o);
+  ASSERT_TRUE(m) << m.error().message();
+  EXPECT_EQ(m.value()->max_frame_bytes(), size_t(640) * 480 * 3 + 4096);  // decoded RGB24
   o.format = "YUYV";
   o.buffers = 1;
   auto b = V4l2Source::create(o);
@@ -59,6 +69,71 @@ TEST(V4l2, ANonCameraIsRefusedWithWhatItIs) {
   ASSERT_FALSE(st);
   EXPECT_NE(std::strstr(st.error().message(), "not a V4L2 device"), nullptr)
       << st.error().message();
+}
+
+// What the MJPEG path decodes a camera's buffer with: a JPEG in memory into
+// the slot; corrupt and truncated frames refused (libjpeg would otherwise
+// fill the missing part with grey and report success).
+std::vector<uint8_t> encode_jpeg(int w, int h) {
+  std::vector<uint8_t> rgb(size_t(w) * h * 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      uint8_t* p = &rgb[(size_t(y) * w + x) * 3];
+      p[0] = uint8_t(x * 4), p[1] = uint8_t(y * 4), p[2] = uint8_t(128);
+    }
+  jpeg_compress_struct c{};
+  jpeg_error_mgr err{};
+  c.err = jpeg_std_error(&err);
+  jpeg_create_compress(&c);
+  unsigned char* out = nullptr;
+  unsigned long size = 0;
+  jpeg_mem_dest(&c, &out, &size);
+  c.image_width = JDIMENSION(w);
+  c.image_height = JDIMENSION(h);
+  c.input_components = 3;
+  c.in_color_space = JCS_RGB;
+  jpeg_set_defaults(&c);
+  jpeg_set_quality(&c, 95, TRUE);
+  jpeg_start_compress(&c, TRUE);
+  while (c.next_scanline < c.image_height) {
+    JSAMPROW row = &rgb[size_t(c.next_scanline) * w * 3];
+    jpeg_write_scanlines(&c, &row, 1);
+  }
+  jpeg_finish_compress(&c);
+  std::vector<uint8_t> bytes(out, out + size);
+  jpeg_destroy_compress(&c);
+  std::free(out);
+  return bytes;
+}
+
+TEST(Mjpeg, DecodesFromMemoryAndRefusesDamage) {
+  auto d = ImageDecoder::create(1, 4096);
+  ASSERT_TRUE(d) << d.error().message();
+  const std::vector<uint8_t> jpg = encode_jpeg(64, 48);
+  std::vector<uint8_t> out(64 * 48 * 3);
+  auto img = d.value()->decode_jpeg_memory(jpg.data(), jpg.size(), out.data(), out.size(), "f1");
+  ASSERT_TRUE(img) << img.error().message();
+  EXPECT_EQ(img->width, 64);
+  EXPECT_EQ(img->height, 48);
+  const uint8_t* p = &out[(size_t(20) * 64 + 30) * 3];
+  EXPECT_NEAR(p[0], 120, 6);
+  EXPECT_NEAR(p[1], 80, 6);
+  EXPECT_NEAR(p[2], 128, 6);
+
+  // Cut inside the entropy-coded data (libjpeg's "premature end" warning).
+  auto cut = d.value()->decode_jpeg_memory(jpg.data(), jpg.size() - jpg.size() / 5, out.data(),
+                                           out.size(), "f2");
+  ASSERT_FALSE(cut);
+  EXPECT_NE(std::strstr(cut.error().message(), "corrupt or truncated JPEG"), nullptr)
+      << cut.error().message();
+  std::vector<uint8_t> junk(jpg.size(), 0x55);
+  auto bad = d.value()->decode_jpeg_memory(junk.data(), junk.size(), out.data(), out.size(), "f3");
+  ASSERT_FALSE(bad);
+  EXPECT_NE(std::strstr(bad.error().message(), "f3: not a JPEG"), nullptr);
+  auto small = d.value()->decode_jpeg_memory(jpg.data(), jpg.size(), out.data(), 100, "f4");
+  ASSERT_FALSE(small);
+  // The decoder is usable after every failure.
+  EXPECT_TRUE(d.value()->decode_jpeg_memory(jpg.data(), jpg.size(), out.data(), out.size(), "f5"));
 }
 
 }  // namespace

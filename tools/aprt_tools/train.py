@@ -38,12 +38,18 @@ class PoseLoss(nn.Module):
         super().__init__()
         self.s_x = nn.Parameter(torch.tensor(s_x))
         self.s_q = nn.Parameter(torch.tensor(s_q))
+        self.norm_weight = 1.0
 
     def forward(self, pred, pos_gt, q_gt):
         l_p = (pred[:, :3] - pos_gt).abs().sum(dim=1).mean()
         q = F.normalize(pred[:, 3:], dim=1)
         l_q = torch.minimum((q - q_gt).abs().sum(dim=1), (q + q_gt).abs().sum(dim=1)).mean()
         loss = l_p * torch.exp(-self.s_x) + self.s_x + l_q * torch.exp(-self.s_q) + self.s_q
+        # Keep the raw quaternion near unit length: the runtime's sanity check
+        # flags |q| outside [0.5, 2] as an output the network was not trained
+        # to give (runtime/pose/pose_decode.cc); without this term the norm
+        # drifts freely, as the loss above only sees the normalised q.
+        loss = loss + self.norm_weight * ((pred[:, 3:].norm(dim=1) - 1.0) ** 2).mean()
         return loss, l_p.detach(), l_q.detach()
 
 

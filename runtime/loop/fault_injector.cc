@@ -1,0 +1,74 @@
+#include "runtime/loop/fault_injector.h"
+
+namespace aprt {
+namespace {
+
+struct Named {
+  const char* name;
+  FaultKind kind;
+};
+constexpr Named kNames[] = {
+    {"camera_stall", FaultKind::kCameraStall},
+    {"inference_overrun", FaultKind::kInferenceOverrun},
+    {"nan_output", FaultKind::kNanOutput},
+    {"publish_failure", FaultKind::kPublishFailure},
+    {"inference_hang", FaultKind::kInferenceHang},
+};
+
+}  // namespace
+
+bool fault_kind_from_name(const std::string& name, FaultKind* out) {
+  for (const Named& n : kNames) {
+    if (name == n.name) {
+      *out = n.kind;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* fault_kind_name(FaultKind k) {
+  for (const Named& n : kNames) {
+    if (n.kind == k) return n.name;
+  }
+  return "?";
+}
+
+Status FaultInjector::configure(const std::vector<FaultSpec>& faults) {
+  if (faults.size() > size_t(kMaxFaults)) {
+    return Error(Errc::kInvalidArgument, "fault_injection: at most %d faults, got %zu", kMaxFaults,
+                 faults.size());
+  }
+  n_ = 0;
+  for (const FaultSpec& f : faults) faults_[n_++] = f;
+  return ok();
+}
+
+int64_t FaultInjector::once(FaultKind k, uint64_t i) const noexcept {
+  int64_t ns = 0;
+  for (int j = 0; j < n_; ++j) {
+    if (faults_[j].kind == k && faults_[j].at_frame == i)
+      ns += int64_t(faults_[j].duration_ms * 1e6);
+  }
+  return ns;
+}
+
+int64_t FaultInjector::window_ns(FaultKind k, uint64_t i) const noexcept {
+  int64_t ns = 0;
+  for (int j = 0; j < n_; ++j) {
+    const FaultSpec& f = faults_[j];
+    if (f.kind == k && i >= f.at_frame && i < f.at_frame + f.count)
+      ns += int64_t(f.duration_ms * 1e6);
+  }
+  return ns;
+}
+
+bool FaultInjector::in_window(FaultKind k, uint64_t i) const noexcept {
+  for (int j = 0; j < n_; ++j) {
+    const FaultSpec& f = faults_[j];
+    if (f.kind == k && i >= f.at_frame && i < f.at_frame + f.count) return true;
+  }
+  return false;
+}
+
+}  // namespace aprt
