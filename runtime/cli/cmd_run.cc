@@ -71,6 +71,8 @@ int cmd_run(int argc, char** argv) {
         "                  p99/p99.9/max, misses, drops, allocations after the first\n"
         "                  pose, RSS) and FILE with .csv (per-pose timestamps); plot\n"
         "                  with python3 -m aprt_tools plot-timing FILE\n"
+        "  --save-frame N:FILE  write the raw frame of the N-th pose to FILE and its\n"
+        "                  geometry and pose to FILE.txt (check with aprt infer)\n"
         "  --check         validate the configuration and load the model, then exit\n"
         "                  (0: both fine; no device is opened)\n",
         data_dir().c_str());
@@ -85,6 +87,7 @@ int cmd_run(int argc, char** argv) {
   const bool quiet = args.flag("--quiet");
   const bool check = args.flag("--check");
   const char* timing = args.value("--timing");
+  const char* save = args.value("--save-frame");
   if (args.error() || args.leftover()) {
     std::fprintf(stderr, "aprt run: bad argument '%s' (see aprt run --help)\n",
                  args.error() ? args.error() : args.leftover());
@@ -142,6 +145,15 @@ int cmd_run(int argc, char** argv) {
               e.threads(), e.threads() > 1 ? "s" : "",
               cfg.source.type == "replay" ? cfg.source.replay.path.c_str()
                                           : cfg.source.v4l2.device.c_str());
+  if (save) {
+    char* colon = nullptr;
+    const long n = std::strtol(save, &colon, 10);
+    if (!colon || *colon != ':' || n < 0 || !colon[1]) {
+      std::fprintf(stderr, "aprt run: --save-frame %s: expected N:FILE\n", save);
+      return 2;
+    }
+    (*runtime)->save_frame(n, colon + 1);
+  }
   (*runtime)->set_allocation_counter(allocation_count, allocation_counter_covers_malloc());
   const int code = (*runtime)->run();
   g_runtime = nullptr;

@@ -20,7 +20,9 @@ void usage(FILE* out) {
                "  info MODEL     what a model file holds: metadata, ops, memory plan\n"
                "  bench MODEL    latency and memory of a model on this machine\n"
                "  eval           errors of a model on a labelled sequence\n"
+               "  infer MODEL F  one saved raw frame (aprt run --save-frame) through a model\n"
                "  candump        decode aprt's pose frames from CAN (the receiver's view)\n"
+               "  ddsdump        receive aprt's poses and status over DDS (the ROS 2 side's view)\n"
                "  sign           Ed25519 keys and model signatures (model_signing)\n"
                "\n"
                "Run 'aprt <command> --help' for the command's options.\n");
@@ -69,6 +71,8 @@ int main(int argc, char** argv) {
   if (!std::strcmp(cmd, "eval")) return aprt::cli::cmd_eval(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "candump")) return aprt::cli::cmd_candump(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "sign")) return aprt::cli::cmd_sign(argc - 1, argv + 1);
+  if (!std::strcmp(cmd, "ddsdump")) return aprt::cli::cmd_ddsdump(argc - 1, argv + 1);
+  if (!std::strcmp(cmd, "infer")) return aprt::cli::cmd_infer(argc - 1, argv + 1);
   std::fprintf(stderr, "aprt: unknown command '%s'\n", cmd);
   usage(stderr);
   return 2;

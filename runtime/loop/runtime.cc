@@ -330,6 +330,7 @@ void Runtime::inference_loop() {
     if (faults_.nan_output(index)) e->output().f32()[0] = std::numeric_limits<float>::quiet_NaN();
     rec.pose = decode_pose(e->output().f32(), m, float(config_.sanity.bounds_margin));
     rec.inference_end_ns = monotonic_ns();
+    if (save_index_ >= 0 && uint64_t(save_index_) == index) write_saved_frame(*f, rec, *e);
     flags |= rec.pose.flags;
     if (rec.inference_end_ns - rec.inference_start_ns > deadline_ns) {
       flags |= kPoseDeadlineMissed;
@@ -590,6 +591,28 @@ int Runtime::run() {
     outputs_->print_summary();
   }
   return code;
+}
+
+void Runtime::write_saved_frame(const FrameBuffer& f, const PoseRecord& rec, const Engine& e) {
+  FILE* raw = std::fopen(save_path_.c_str(), "wb");
+  FILE* txt = std::fopen((save_path_ + ".txt").c_str(), "w");
+  bool ok = raw && txt && std::fwrite(f.data, 1, f.info.bytes, raw) == f.info.bytes;
+  if (txt) {
+    const PoseEstimate& p = rec.pose;
+    ok = std::fprintf(txt,
+                      "format %s\nwidth %d\nheight %d\nstride %zu\nbytes %zu\nname %s\n"
+                      "model %s\nisa %s\npose %.9g %.9g %.9g %.9g %.9g %.9g %.9g\nflags %u\n",
+                      kernels::pixel_format_name(f.info.format), f.info.width, f.info.height,
+                      f.info.stride, f.info.bytes, f.info.name, config_.model.c_str(),
+                      e.isa(), p.position[0], p.position[1], p.position[2],
+                      p.orientation[0], p.orientation[1], p.orientation[2], p.orientation[3],
+                      p.flags) > 0 &&
+         ok;
+  }
+  if (raw) ok = std::fclose(raw) == 0 && ok;
+  if (txt) ok = std::fclose(txt) == 0 && ok;
+  std::fprintf(stderr, "aprt run: %s frame %s to %s\n", ok ? "saved" : "could not save",
+               f.info.name, save_path_.c_str());
 }
 
 void Runtime::service_reload() {

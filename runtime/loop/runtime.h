@@ -17,6 +17,7 @@
 
 #include <atomic>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "drivers/frame/frame_slot.h"
@@ -90,6 +91,14 @@ class Runtime {
     *count = state_change_count_;
     return state_changes_;
   }
+  // Diagnostics: write the raw frame of pose `index` to `path` and, to
+  // `path`.txt, its geometry and the pose computed for it (`aprt infer`
+  // recomputes it elsewhere -- the HIL rig's VM-vs-host check). One file
+  // write on the inference thread for that one frame; off by default.
+  void save_frame(int64_t index, const std::string& path) {
+    save_index_ = index;
+    save_path_ = path;
+  }
   // After run(): the timing validation report (timing_report.h).
   Status write_timing_report(const char* json_path) const;
 
@@ -134,7 +143,10 @@ class Runtime {
   std::atomic<uint64_t> poses_flagged_{0}, deadline_misses_{0};
   std::atomic<uint64_t> published_{0};
   std::atomic<uint64_t> output_errors_{0};
-  uint64_t injected_publish_failures_ = 0;  // publish thread; read after join
+  uint64_t injected_publish_failures_ = 0;
+  int64_t save_index_ = -1;
+  std::string save_path_;
+  void write_saved_frame(const FrameBuffer& f, const PoseRecord& rec, const Engine& e);  // publish thread; read after join
   FaultInjector faults_;
   StateChange state_changes_[kMaxStateChanges] = {};
   size_t state_change_count_ = 0;

@@ -7,6 +7,8 @@
 # SCENARIO is a file tests/hil/scenarios/NAME.sh; it runs under busybox sh in
 # the VM with aprt (the release build), can-utils, iproute2, a tiny model and
 # a short synthetic drive, and reports with ok/not_ok (scenarios/lib.sh).
+# A scenario may have a host-side part, scenarios/NAME.host, run after its VM
+# on what the VM reported (e.g. a frame to recompute here).
 # Results: OUT/NAME.tap, OUT/NAME.console.log. Exit status 0 only if every
 # scenario's plan completed and every test passed.
 set -euo pipefail
@@ -18,7 +20,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --build) build="$2"; shift 2 ;;
     --out) out="$2"; shift 2 ;;
-    -h|--help) sed -n 2,13p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,15p "$0"; exit 0 ;;
     *) break ;;
   esac
 done
@@ -69,6 +71,8 @@ if [ ! -f "$data/model.aprt" ] || [ ! -f "$data/drive/poses.txt" ]; then
   "$build/bin/aprt_synth" --out "$data/drive" --frames 30 --split test --width 128 --height 96 >/dev/null
 fi
 cp "$data/model.aprt" "$root/aprt/data/"
+# The shipped model, for the scenarios that check real poses (camera_dds).
+[ -f "$top/model_bin/town_64.aprt" ] && cp "$top/model_bin/town_64.aprt" "$root/aprt/data/shipped.aprt"
 cp -r "$data/drive" "$root/aprt/data/drive"
 
 # Modules and what they depend on, from modules.dep.
@@ -130,6 +134,11 @@ for s in "${scenarios[@]}"; do
     else echo "not ok - $s: expected a reset, the scenario exited $code" >> "$tap"; fi
   elif [ -z "$code" ]; then
     echo "not ok - $s: the VM stopped without an exit status (reset, panic or timeout)" >> "$tap"
+  fi
+  # Host-side checks of what the VM produced (scenarios/NAME.host: bash, appends TAP).
+  if [ -f "$here/scenarios/$s.host" ]; then
+    bash "$here/scenarios/$s.host" "$tap" "$build" "$top" "$work" >> "$tap" 2>&1 ||
+      echo "not ok - $s: host-side check failed to run" >> "$tap"
   fi
   fails=$(grep -c '^not ok' "$tap" || true); oks=$(grep -c '^ok' "$tap" || true)
   printf 'hil: %-20s %d ok, %d not ok, %.1f s (%s)\n' "$s" "$oks" "$fails" "$took" "$accel"
