@@ -5,8 +5,8 @@
 // like a ROS 2 node with default QoS and prints every pose received, one
 // line each, and the status changes. Exit 0 when at least one pose (or
 // --count poses) arrived before the timeout, 1 otherwise.
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>

@@ -125,14 +125,14 @@ int cmd_infer(int argc, char** argv) {
   const PoseEstimate p = decode_pose(e.output().f32(), m);
   const double here[7] = {p.position[0],    p.position[1],    p.position[2],   p.orientation[0],
                           p.orientation[1], p.orientation[2], p.orientation[3]};
-  std::printf("pose  %.9g %.9g %.9g %.9g %.9g %.9g %.9g (%s kernels)\n", here[0], here[1],
-              here[2], here[3], here[4], here[5], here[6], e.isa());
+  std::printf("pose  %.9g %.9g %.9g %.9g %.9g %.9g %.9g (%s kernels)\n", here[0], here[1], here[2],
+              here[3], here[4], here[5], here[6], e.isa());
   if (!have_pose) return 0;
   double dp = 0, dq = 0;
   for (int k = 0; k < 3; ++k) dp = std::max(dp, std::fabs(here[k] - saved[k]));
   for (int k = 3; k < 7; ++k) dq = std::max(dq, std::fabs(here[k] - saved[k]));
-  std::printf("saved %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", saved[0], saved[1], saved[2],
-              saved[3], saved[4], saved[5], saved[6]);
+  std::printf("saved %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", saved[0], saved[1], saved[2], saved[3],
+              saved[4], saved[5], saved[6]);
   std::printf("difference: position %.3g m, quaternion %.3g (tolerance %g)\n", dp, dq, tol);
   return dp <= tol && dq <= tol ? 0 : 1;
 }

@@ -141,11 +141,18 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
   r->outputs_ = std::move(outputs.value());
   r->ring_.reset(new (std::nothrow) SpscRing<PoseRecord, 64>());
   if (!r->ring_) return Error(Errc::kOutOfMemory, "run: out of memory");
-  const size_t capacity =
-      config.source.type != "replay" || config.source.replay.loop ? size_t(1) << 20 : frames + 16;
+  // Per-pose records for the summary and --timing: the run's length when it is
+  // known, else 2^20 poses (9.7 h at 30 Hz; later poses are not recorded).
+  const bool replay = config.source.type == "replay";
+  const size_t capacity = replay && config.source.replay.frames > 0
+                              ? size_t(config.source.replay.frames) + 16
+                          : replay && !config.source.replay.loop ? frames + 16
+                                                                 : size_t(1) << 20;
   r->timings_.resize(capacity);
-  r->pos_errors_.reserve(capacity);
-  r->rot_errors_.reserve(capacity);
+  // Sized (and so written, every page resident) here, not grown by push_back:
+  // the loop then touches no new memory, which the soak's RSS check relies on.
+  r->pos_errors_.resize(capacity);
+  r->rot_errors_.resize(capacity);
   if (!config.supervisor.watchdog_device.empty()) {
     r->watchdog_fd_ = open(config.supervisor.watchdog_device.c_str(), O_WRONLY | O_CLOEXEC);
     if (r->watchdog_fd_ < 0) {
@@ -438,14 +445,14 @@ void Runtime::publish_loop() {
       timings_[timing_count_++] = {r.capture_ns, r.inference_start_ns, r.inference_end_ns, now};
     }
     published_.fetch_add(1, std::memory_order_release);
-    if (r.has_truth && pos_errors_.size() < pos_errors_.capacity()) {
+    if (r.has_truth && error_count_ < pos_errors_.size()) {
       double d = 0;
       for (int k = 0; k < 3; ++k) {
         d +=
             (r.pose.position[k] - r.truth_position[k]) * (r.pose.position[k] - r.truth_position[k]);
       }
-      pos_errors_.push_back(float(std::sqrt(d)));
-      rot_errors_.push_back(float(angle_deg(r.pose.orientation, r.truth_orientation)));
+      pos_errors_[error_count_] = float(std::sqrt(d));
+      rot_errors_[error_count_++] = float(angle_deg(r.pose.orientation, r.truth_orientation));
     }
   }
 }
@@ -473,6 +480,8 @@ void Runtime::print_summary() {
         percentile(e2e, 0.5), percentile(e2e, 0.99), percentile(e2e, 1.0), engine_->isa(),
         engine_->threads());
   }
+  pos_errors_.resize(error_count_);  // after the run: the summary may allocate
+  rot_errors_.resize(error_count_);
   if (!pos_errors_.empty()) {
     double ps = 0, rs = 0;
     for (float v : pos_errors_) ps += v;
@@ -530,8 +539,14 @@ int Runtime::run() {
     h.end_of_stream = capture_done && inference_done && ring_->size() == 0;
     if (capture_done && h.last_frame_ns)
       h.last_frame_ns = h.now_ns;  // a finished replay is not stale
-    if (!steady_.valid && published_.load(std::memory_order_acquire) > 0) {
-      steady_ = {true, allocation_count_ ? allocation_count_() : 0, current_rss_kb()};
+    if (!warm_.valid) {
+      const uint64_t n = published_.load(std::memory_order_acquire);
+      if (!steady_.valid && n > 0) {
+        steady_ = {true, allocation_count_ ? allocation_count_() : 0, current_rss_kb()};
+      }
+      if (n >= kRssWarmupPoses) {
+        warm_ = {true, allocation_count_ ? allocation_count_() : 0, current_rss_kb()};
+      }
     }
     service_reload();
     const RunState st = supervisor_.step(h);
@@ -603,10 +618,9 @@ void Runtime::write_saved_frame(const FrameBuffer& f, const PoseRecord& rec, con
                       "format %s\nwidth %d\nheight %d\nstride %zu\nbytes %zu\nname %s\n"
                       "model %s\nisa %s\npose %.9g %.9g %.9g %.9g %.9g %.9g %.9g\nflags %u\n",
                       kernels::pixel_format_name(f.info.format), f.info.width, f.info.height,
-                      f.info.stride, f.info.bytes, f.info.name, config_.model.c_str(),
-                      e.isa(), p.position[0], p.position[1], p.position[2],
-                      p.orientation[0], p.orientation[1], p.orientation[2], p.orientation[3],
-                      p.flags) > 0 &&
+                      f.info.stride, f.info.bytes, f.info.name, config_.model.c_str(), e.isa(),
+                      p.position[0], p.position[1], p.position[2], p.orientation[0],
+                      p.orientation[1], p.orientation[2], p.orientation[3], p.flags) > 0 &&
          ok;
   }
   if (raw) ok = std::fclose(raw) == 0 && ok;
@@ -657,6 +671,8 @@ Status Runtime::write_timing_report(const char* json_path) const {
   ctx.allocations_counted = allocation_count_ != nullptr;
   ctx.counter_covers_malloc = counter_covers_malloc_;
   ctx.steady = steady_;
+  ctx.warm = warm_;
+  ctx.warmup_poses = kRssWarmupPoses;
   ctx.end = end_;
   // getrusage's peak is updated lazily by the kernel; never below what statm saw.
   ctx.peak_rss_kb = std::max(peak_rss_kb(), end_.rss_kb);

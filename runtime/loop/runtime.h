@@ -146,13 +146,17 @@ class Runtime {
   uint64_t injected_publish_failures_ = 0;
   int64_t save_index_ = -1;
   std::string save_path_;
-  void write_saved_frame(const FrameBuffer& f, const PoseRecord& rec, const Engine& e);  // publish thread; read after join
+  void write_saved_frame(const FrameBuffer& f, const PoseRecord& rec,
+                         const Engine& e);  // publish thread; read after join
   FaultInjector faults_;
   StateChange state_changes_[kMaxStateChanges] = {};
   size_t state_change_count_ = 0;
   uint64_t (*allocation_count_)() noexcept = nullptr;
   bool counter_covers_malloc_ = false;
-  MemorySample steady_, end_;
+  MemorySample steady_, warm_, end_;
+  // RSS growth is measured from here: the first poses touch preallocated
+  // pages (decoder buffers sized for the largest file, stacks) for the first time.
+  static constexpr uint64_t kRssWarmupPoses = 1000;
   double duration_s_ = 0;
 
   pthread_t capture_{}, inference_{}, publish_{};
@@ -160,7 +164,8 @@ class Runtime {
   int64_t started_ns_ = 0;
   std::vector<TimingRecord> timings_;
   size_t timing_count_ = 0;
-  std::vector<float> pos_errors_, rot_errors_;  // with ground truth
+  std::vector<float> pos_errors_, rot_errors_;  // with ground truth, error_count_ of them
+  size_t error_count_ = 0;
   RunStats stats_;
   int watchdog_fd_ = -1;
 };

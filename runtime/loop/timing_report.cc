@@ -117,16 +117,21 @@ Status write_timing_report(const char* json_path, const TimingRecord* records, s
                ctx.camera_period_ms, ctx.inference_deadline_ms, bound, se.p999,
                n > 0 && se.p999 <= bound ? "true" : "false");
   if (ctx.allocations_counted && ctx.steady.valid && ctx.end.valid) {
+    // Growth from the warm-up point when the run reached it, else from the first pose.
+    const MemorySample& from = ctx.warm.valid ? ctx.warm : ctx.steady;
     std::fprintf(
         f,
         "  \"memory\": {\"allocations_after_first_pose\": %llu, \"counter_covers_malloc\": "
-        "%s, \"rss_kb_after_first_pose\": %llu, \"rss_kb_end\": %llu, "
-        "\"rss_growth_kb\": %lld, \"peak_rss_kb\": %llu}\n",
+        "%s, \"rss_kb_after_first_pose\": %llu, \"rss_kb_after_warmup\": %llu, "
+        "\"warmup_poses\": %llu, \"rss_kb_end\": %llu, \"rss_growth_kb\": %lld, "
+        "\"peak_rss_kb\": %llu}\n",
         static_cast<unsigned long long>(ctx.end.allocations - ctx.steady.allocations),
         ctx.counter_covers_malloc ? "true" : "false",
         static_cast<unsigned long long>(ctx.steady.rss_kb),
+        static_cast<unsigned long long>(from.rss_kb),
+        static_cast<unsigned long long>(ctx.warm.valid ? ctx.warmup_poses : 1),
         static_cast<unsigned long long>(ctx.end.rss_kb),
-        static_cast<long long>(ctx.end.rss_kb) - static_cast<long long>(ctx.steady.rss_kb),
+        static_cast<long long>(ctx.end.rss_kb) - static_cast<long long>(from.rss_kb),
         static_cast<unsigned long long>(ctx.peak_rss_kb));
   } else {
     std::fprintf(f,

@@ -33,7 +33,9 @@ struct TimingContext {
   bool allocations_counted = false;  // an allocation counter is linked in
   bool counter_covers_malloc = false;
   MemorySample steady;  // after the first published pose
-  MemorySample end;     // after the last
+  MemorySample warm;    // after warmup_poses (invalid when the run was shorter)
+  uint64_t warmup_poses = 0;
+  MemorySample end;  // after the last
   uint64_t peak_rss_kb = 0;
   double duration_s = 0;
 };
