@@ -14,7 +14,9 @@
 #include "kernels/common/preprocess_image.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
+#include "runtime/cli/load_model.h"
 #include "runtime/engine/engine.h"
+#include "runtime/engine/model_input.h"
 #include "runtime/pose/pose_decode.h"
 
 namespace aprt::cli {
@@ -66,16 +68,9 @@ int cmd_eval(int argc, char** argv) {
     std::fprintf(stderr, "aprt eval: usage: aprt eval --model MODEL --data DIR [--csv FILE]\n");
     return 2;
   }
-  EngineOptions opts;
-  opts.threads = int(threads);
-  opts.isa = isa;
-  opts.expect_modality = uint32_t(format::Modality::kImage);
-  auto loaded = Engine::load_file(model_path, opts);
-  if (!loaded) {
-    std::fprintf(stderr, "aprt eval: %s\n", loaded.error().message());
-    return 2;
-  }
-  Engine& e = *loaded.value();
+  std::unique_ptr<Engine> engine = load_image_model("eval", model_path, int(threads), isa);
+  if (!engine) return 2;
+  Engine& e = *engine;
   auto replay = DeeplocReplay::open(data);
   if (!replay) {
     std::fprintf(stderr, "aprt eval: %s\n", replay.error().message());
@@ -83,11 +78,7 @@ int cmd_eval(int argc, char** argv) {
   }
   DeeplocReplay& r = *replay.value();
   const ModelMeta& m = e.meta();
-  kernels::PreprocessParams pp{int(m.input_shape[1]), int(m.input_shape[3]), {}, {}};
-  for (int c = 0; c < m.norm_channels; ++c) {
-    pp.mean[c] = m.norm_mean[c];
-    pp.std[c] = m.norm_std[c];
-  }
+  const kernels::PreprocessParams pp = preprocess_params(m);
   auto plan = std::make_unique<kernels::PreprocessPlan>();
   if (!kernels::plan_preprocess(pp, kernels::PixelFormat::kRgb24, r.width(), r.height(),
                                 plan.get())) {

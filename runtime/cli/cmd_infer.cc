@@ -19,7 +19,9 @@
 #include "kernels/common/preprocess_image.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
+#include "runtime/cli/load_model.h"
 #include "runtime/engine/engine.h"
+#include "runtime/engine/model_input.h"
 #include "runtime/pose/pose_decode.h"
 
 namespace aprt::cli {
@@ -97,22 +99,11 @@ int cmd_infer(int argc, char** argv) {
                  pixels.size(), bytes, width, height, format_name.c_str());
     return 2;
   }
-  EngineOptions opts;
-  opts.threads = int(threads);
-  opts.isa = isa;
-  opts.expect_modality = uint32_t(format::Modality::kImage);
-  auto loaded = Engine::load_file(model, opts);
-  if (!loaded) {
-    std::fprintf(stderr, "aprt infer: %s\n", loaded.error().message());
-    return 2;
-  }
-  Engine& e = *loaded.value();
+  std::unique_ptr<Engine> engine = load_image_model("infer", model, int(threads), isa);
+  if (!engine) return 2;
+  Engine& e = *engine;
   const ModelMeta& m = e.meta();
-  kernels::PreprocessParams pp{int(m.input_shape[1]), int(m.input_shape[3]), {}, {}};
-  for (int c = 0; c < m.norm_channels; ++c) {
-    pp.mean[c] = m.norm_mean[c];
-    pp.std[c] = m.norm_std[c];
-  }
+  const kernels::PreprocessParams pp = preprocess_params(m);
   auto plan = std::make_unique<kernels::PreprocessPlan>();
   if (!kernels::plan_preprocess(pp, format, width, height, plan.get())) {
     std::fprintf(stderr, "aprt infer: cannot map %dx%d frames to the model's input\n", width,

@@ -20,6 +20,7 @@
 
 #include "drivers/camera/v4l2_source.h"
 #include "drivers/replay/replay_source.h"
+#include "runtime/engine/model_input.h"
 #include "runtime/loop/model_loader.h"
 
 namespace aprt {
@@ -126,11 +127,7 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
     static_cast<ReplaySource*>(r->source_.get())->pace_with(r->slot_.get());
   }
   const ModelMeta& m = r->engine_->meta();
-  kernels::PreprocessParams pp{int(m.input_shape[1]), int(m.input_shape[3]), {}, {}};
-  for (int c = 0; c < m.norm_channels; ++c) {
-    pp.mean[c] = m.norm_mean[c];
-    pp.std[c] = m.norm_std[c];
-  }
+  const kernels::PreprocessParams pp = preprocess_params(m);
   r->plan_.reset(new (std::nothrow) kernels::PreprocessPlan());
   if (!r->plan_ || !kernels::plan_preprocess(pp, format, width, height, r->plan_.get())) {
     return Error(Errc::kInvalidArgument, "run: cannot map %dx%d frames to the model's %dx%d input",
