@@ -231,6 +231,10 @@ TEST(FaultInjection, CameraStallDegradesAndRecovers) {
 TEST(FaultInjection, InferenceOverrunFlagsLatePosesAndRecovers) {
   Config c = shipped_config();
   if (c.model.empty()) GTEST_SKIP() << "no shipped model";
+  // A slow stage still beats between frames; the hung-stage limit (2 x
+  // frame_timeout) must stay above one overrun frame.
+  c.supervisor.frame_timeout_ms = 3000;
+  c.source.replay.frames = 280;  // 7 s: time to recover after 3.6 s of overrun
   c.fault_injection.push_back({FaultKind::kInferenceOverrun, 20, 3, 1200});
   std::vector<std::string> t;
   RunStats st;
