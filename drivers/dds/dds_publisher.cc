@@ -14,7 +14,7 @@ struct DdsPublisher::Samples {
   geometry_msgs_msg_dds__PoseWithCovarianceStamped_ pose{};
   diagnostic_msgs_msg_dds__DiagnosticArray_ diag{};
   diagnostic_msgs_msg_dds__DiagnosticStatus_ status{};
-  static constexpr int kMaxValues = 16;
+  static constexpr int kMaxValues = 24;  // 12 loop and CAN values, fusion, 8 cameras
   diagnostic_msgs_msg_dds__KeyValue_ values[kMaxValues]{};
   char message[128] = {};
   char name[32] = "aprt: pose";

@@ -49,6 +49,10 @@ int check_only(const std::string& path, const Config& cfg) {
   if (!note.empty()) std::printf("aprt run: %s: %s\n", cfg.model.c_str(), note.c_str());
   std::printf("aprt run: %s: configuration valid; model %s loads (%s kernels, %zu bytes)\n",
               path.c_str(), cfg.model.c_str(), (*engine)->isa(), (*engine)->memory().total_bytes);
+  if (!cfg.cameras.empty()) {
+    std::printf("aprt run: %zu cameras fused (trigger: %s)\n", cfg.cameras.size(),
+                cfg.cameras[0].name.c_str());
+  }
   return 0;
 }
 
@@ -107,24 +111,38 @@ int cmd_run(int argc, char** argv) {
   }() : data_dir();
   cfg.model = resolve(model ? model : cfg.model, model ? "." : base);
   cfg.model_signing.public_key = resolve(cfg.model_signing.public_key, base);
-  if (replay) {
-    cfg.source.type = "replay";
-    cfg.source.replay.path = replay;
-  } else {
-    cfg.source.replay.path = resolve(cfg.source.replay.path, base);
+  if (replay && !cfg.cameras.empty()) {
+    std::fprintf(stderr,
+                 "aprt run: --replay replaces the single camera; %s configures %zu cameras\n",
+                 path.c_str(), cfg.cameras.size());
+    return 2;
   }
+  double rate_hz = -1;
   if (rate) {
     char* end = nullptr;
-    const double r = std::strtod(rate, &end);
-    if (!end || *end || !(r >= 0 && r <= 1000)) {
+    rate_hz = std::strtod(rate, &end);
+    if (!end || *end || !(rate_hz >= 0 && rate_hz <= 1000)) {
       std::fprintf(stderr, "aprt run: --rate %s: expected a number in [0, 1000]\n", rate);
       return 2;
     }
-    cfg.source.replay.rate_hz = r;
-    cfg.source.replay.recorded = false;
   }
+  // The command line's replay options apply to every camera's replay.
+  const auto adjust = [&](Config::Source& src) {
+    if (replay) {
+      src.type = "replay";
+      src.replay.path = replay;
+    } else {
+      src.replay.path = resolve(src.replay.path, base);
+    }
+    if (rate_hz >= 0) {
+      src.replay.rate_hz = rate_hz;
+      src.replay.recorded = false;
+    }
+    if (frames > 0) src.replay.frames = int(frames);
+  };
+  adjust(cfg.source);
+  for (Config::Camera& cam : cfg.cameras) adjust(cam.source);
   if (threads > 0) cfg.engine.threads = int(threads);
-  if (frames > 0) cfg.source.replay.frames = int(frames);
   if (quiet) cfg.output.console = false;
   if (check) return check_only(path, cfg);
   auto runtime = Runtime::create(cfg);
@@ -145,6 +163,11 @@ int cmd_run(int argc, char** argv) {
               e.threads(), e.threads() > 1 ? "s" : "",
               cfg.source.type == "replay" ? cfg.source.replay.path.c_str()
                                           : cfg.source.v4l2.device.c_str());
+  for (size_t i = 1; i < cfg.cameras.size(); ++i) {
+    const Config::Source& src = cfg.cameras[i].source;
+    std::printf("aprt run: fused with camera %s on %s\n", cfg.cameras[i].name.c_str(),
+                src.type == "replay" ? src.replay.path.c_str() : src.v4l2.device.c_str());
+  }
   if (save) {
     char* colon = nullptr;
     const long n = std::strtol(save, &colon, 10);

@@ -197,6 +197,91 @@ Status read_transform(Reader& r, const Node* parent, const char* name, double xy
   return r.vec3(n, path, "rpy_deg", -360, 360, rpy);
 }
 
+Status read_source(Reader& r, const Node* src, const std::string& path, Config::Source* src_out) {
+  Status s;
+  const auto join = [&](const std::string& p, const char* k) { return Reader::join(p, k); };
+#define TRY(expr) \
+  if (!(s = (expr))) return s
+  TRY(r.map(src, path, {"type", "replay", "v4l2"}));
+  TRY(r.str(src, path, "type", &src_out->type, {"replay", "v4l2", "libcamera"}));
+  const Node* rp = src ? src->get("replay") : nullptr;
+  TRY(r.map(rp, join(path, "replay"), {"path", "rate_hz", "loop", "frames"}));
+  TRY(r.str(rp, join(path, "replay"), "path", &src_out->replay.path));
+  if (rp && rp->get("rate_hz") && rp->get("rate_hz")->scalar == "recorded") {
+    src_out->replay.recorded = true;
+  } else {
+    TRY(r.num(rp, join(path, "replay"), "rate_hz", 0, 1000, &src_out->replay.rate_hz));
+  }
+  TRY(r.boolean(rp, join(path, "replay"), "loop", &src_out->replay.loop));
+  TRY(r.integer(rp, join(path, "replay"), "frames", 0, 1000000000, &src_out->replay.frames));
+  const Node* v = src ? src->get("v4l2") : nullptr;
+  TRY(r.map(v, join(path, "v4l2"), {"device", "width", "height", "format", "fps", "buffers"}));
+  TRY(r.str(v, join(path, "v4l2"), "device", &src_out->v4l2.device));
+  TRY(r.integer(v, join(path, "v4l2"), "width", 16, 8192, &src_out->v4l2.width));
+  TRY(r.integer(v, join(path, "v4l2"), "height", 16, 8192, &src_out->v4l2.height));
+  TRY(r.str(v, join(path, "v4l2"), "format", &src_out->v4l2.format,
+            {"YUYV", "UYVY", "NV12", "RGB24", "BGR24", "MJPEG"}));
+  TRY(r.integer(v, join(path, "v4l2"), "fps", 1, 1000, &src_out->v4l2.fps));
+  TRY(r.integer(v, join(path, "v4l2"), "buffers", 2, 32, &src_out->v4l2.buffers));
+
+#undef TRY
+  return ok();
+}
+
+// cameras: a list of {name, source, sensor_to_base_link}; not beside `source`
+// or `extrinsics.sensor_to_base_link`, which describe the single camera.
+Status read_cameras(Reader& r, const Node* root, Config* c) {
+  const Node* list = root->get("cameras");
+  if (!list || list->kind == Node::kNull) return ok();
+  if (list->kind != Node::kSeq || list->seq.empty()) {
+    return r.fail(list, "cameras", "expected a list of cameras");
+  }
+  if (list->seq.size() > size_t(Config::kMaxCameras)) {
+    return r.fail(list, "cameras", "at most " + std::to_string(Config::kMaxCameras) + " cameras");
+  }
+  if (const Node* s = root->get("source")) {
+    return r.fail(s, "source", "give either `source` (one camera) or `cameras`, not both");
+  }
+  const Node* ex = root->get("extrinsics");
+  if (const Node* e = ex ? ex->get("sensor_to_base_link") : nullptr) {
+    return r.fail(e, "extrinsics.sensor_to_base_link",
+                  "with `cameras`, each camera has its own sensor_to_base_link");
+  }
+  Status s;
+  for (size_t i = 0; i < list->seq.size(); ++i) {
+    const Node* n = list->seq[i].get();
+    const std::string p = "cameras[" + std::to_string(i) + "]";
+    if (n->kind != Node::kMap) return r.fail(n, p, "expected a mapping");
+    if (!(s = r.map(n, p, {"name", "source", "sensor_to_base_link"}))) return s;
+    Config::Camera cam;
+    if (!(s = r.str(n, p, "name", &cam.name))) return s;
+    if (cam.name.empty())
+      return r.fail(n, p + ".name", "required (it names the camera in diagnostics)");
+    for (const Config::Camera& other : c->cameras) {
+      if (other.name == cam.name)
+        return r.fail(n->get("name"), p + ".name", "'" + cam.name + "' is used twice");
+    }
+    const Node* src = n->get("source");
+    if (!src) return r.fail(n, p + ".source", "required");
+    if (!(s = read_source(r, src, p + ".source", &cam.source))) return s;
+    if (cam.source.type == "replay" && cam.source.replay.path.empty()) {
+      return r.fail(src, p + ".source.replay.path", "required for a replay source");
+    }
+    const Node* t = n->get("sensor_to_base_link");
+    const std::string tp = p + ".sensor_to_base_link";
+    if (!(s = r.map(t, tp, {"xyz", "rpy_deg"}))) return s;
+    if (!(s = r.vec3(t, tp, "xyz", -1e7, 1e7, cam.sensor_xyz))) return s;
+    if (!(s = r.vec3(t, tp, "rpy_deg", -360, 360, cam.sensor_rpy_deg))) return s;
+    c->cameras.push_back(cam);
+  }
+  c->source = c->cameras[0].source;
+  for (int k = 0; k < 3; ++k) {
+    c->extrinsics.sensor_xyz[k] = c->cameras[0].sensor_xyz[k];
+    c->extrinsics.sensor_rpy_deg[k] = c->cameras[0].sensor_rpy_deg[k];
+  }
+  return ok();
+}
+
 Status read_thread(Reader& r, const Node* root, const char* name, ThreadConfig* t) {
   const std::string path = std::string("threads.") + name;
   const Node* n = root ? root->get(name) : nullptr;
@@ -219,8 +304,8 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
 #define APRT_TRY(expr) \
   if (!(s = (expr))) return s.error()
   APRT_TRY(r.map(root, "",
-                 {"model", "model_signing", "engine", "source", "output", "extrinsics",
-                  "supervisor", "sanity", "threads", "fault_injection"}));
+                 {"model", "model_signing", "engine", "source", "cameras", "fusion", "output",
+                  "extrinsics", "supervisor", "sanity", "threads", "fault_injection"}));
   if (root && root->kind == Node::kMap) {
     APRT_TRY(r.str(root, "", "model", &c.model));
     if (const Node* fi = root->get("fault_injection"); fi && fi->kind != Node::kNull) {
@@ -265,28 +350,19 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(r.str(e, "engine", "isa", &c.engine.isa, {"auto", "ref", "avx512", "avx2", "neon"}));
     APRT_TRY(r.int_list(e, "engine", "cpus", 0, 1023, &c.engine.cpus));
 
-    const Node* src = root->get("source");
-    APRT_TRY(r.map(src, "source", {"type", "replay", "v4l2"}));
-    APRT_TRY(r.str(src, "source", "type", &c.source.type, {"replay", "v4l2", "libcamera"}));
-    const Node* rp = src ? src->get("replay") : nullptr;
-    APRT_TRY(r.map(rp, "source.replay", {"path", "rate_hz", "loop", "frames"}));
-    APRT_TRY(r.str(rp, "source.replay", "path", &c.source.replay.path));
-    if (rp && rp->get("rate_hz") && rp->get("rate_hz")->scalar == "recorded") {
-      c.source.replay.recorded = true;
-    } else {
-      APRT_TRY(r.num(rp, "source.replay", "rate_hz", 0, 1000, &c.source.replay.rate_hz));
-    }
-    APRT_TRY(r.boolean(rp, "source.replay", "loop", &c.source.replay.loop));
-    APRT_TRY(r.integer(rp, "source.replay", "frames", 0, 1000000000, &c.source.replay.frames));
-    const Node* v = src ? src->get("v4l2") : nullptr;
-    APRT_TRY(r.map(v, "source.v4l2", {"device", "width", "height", "format", "fps", "buffers"}));
-    APRT_TRY(r.str(v, "source.v4l2", "device", &c.source.v4l2.device));
-    APRT_TRY(r.integer(v, "source.v4l2", "width", 16, 8192, &c.source.v4l2.width));
-    APRT_TRY(r.integer(v, "source.v4l2", "height", 16, 8192, &c.source.v4l2.height));
-    APRT_TRY(r.str(v, "source.v4l2", "format", &c.source.v4l2.format,
-                   {"YUYV", "UYVY", "NV12", "RGB24", "BGR24", "MJPEG"}));
-    APRT_TRY(r.integer(v, "source.v4l2", "fps", 1, 1000, &c.source.v4l2.fps));
-    APRT_TRY(r.integer(v, "source.v4l2", "buffers", 2, 32, &c.source.v4l2.buffers));
+    APRT_TRY(read_source(r, root->get("source"), "source", &c.source));
+    APRT_TRY(read_cameras(r, root, &c));
+    const Node* fu = root->get("fusion");
+    APRT_TRY(r.map(fu, "fusion",
+                   {"max_position_spread_m", "max_orientation_spread_deg", "min_agreeing",
+                    "max_frame_skew_ms"}));
+    APRT_TRY(
+        r.num(fu, "fusion", "max_position_spread_m", 0.01, 1e4, &c.fusion.max_position_spread_m));
+    APRT_TRY(r.num(fu, "fusion", "max_orientation_spread_deg", 0.01, 180,
+                   &c.fusion.max_orientation_spread_deg));
+    APRT_TRY(
+        r.integer(fu, "fusion", "min_agreeing", 1, Config::kMaxCameras, &c.fusion.min_agreeing));
+    APRT_TRY(r.num(fu, "fusion", "max_frame_skew_ms", 0, 1000, &c.fusion.max_frame_skew_ms));
 
     const Node* out = root->get("output");
     APRT_TRY(r.map(out, "output",
@@ -389,6 +465,18 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
                  origin.c_str());
   }
   return c;
+}
+
+std::vector<Config::Camera> camera_list(const Config& c) {
+  if (!c.cameras.empty()) return c.cameras;
+  Config::Camera one;
+  one.name = "camera";
+  one.source = c.source;
+  for (int k = 0; k < 3; ++k) {
+    one.sensor_xyz[k] = c.extrinsics.sensor_xyz[k];
+    one.sensor_rpy_deg[k] = c.extrinsics.sensor_rpy_deg[k];
+  }
+  return {one};
 }
 
 Expected<Config> load_config(const std::string& path) {

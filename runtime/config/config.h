@@ -55,6 +55,26 @@ struct Config {
     } v4l2;
   } source;
 
+  // Several cameras, fused into one pose (runtime/pose/pose_fusion.h). Empty:
+  // one camera, `source` with `extrinsics.sensor_to_base_link`. When the
+  // configuration lists cameras, `source` and the sensor extrinsic mirror the
+  // first one (the trigger: its frames start each fusion cycle).
+  struct Camera {
+    std::string name;
+    Source source;
+    double sensor_xyz[3] = {0, 0, 0};
+    double sensor_rpy_deg[3] = {0, 0, 0};
+  };
+  static constexpr int kMaxCameras = 8;
+  std::vector<Camera> cameras;
+
+  struct Fusion {
+    double max_position_spread_m = 5.0;  // an estimate this far from the consensus is an outlier
+    double max_orientation_spread_deg = 10.0;  // ... or this far in orientation
+    int min_agreeing = 1;             // at least this many agreeing cameras (and always a majority)
+    double max_frame_skew_ms = 20.0;  // wait this long after the trigger for the others' frames
+  } fusion;
+
   struct Output {
     bool console = true;  // a line per pose (with errors when the source has ground truth)
     bool summary = true;  // statistics at exit
@@ -112,6 +132,10 @@ struct Config {
     bool lock_memory = true;  // mlockall
   } threads;
 };
+
+// The cameras the loop runs: `cameras`, or the single `source` with the
+// sensor extrinsic when the configuration names none.
+std::vector<Config::Camera> camera_list(const Config& c);
 
 // Parses and validates a YAML file.
 Expected<Config> load_config(const std::string& path);

@@ -42,6 +42,10 @@ Expected<std::unique_ptr<PoseOutputs>> PoseOutputs::create(const Config& config,
                  "covariance",
                  config.origin.c_str());
   }
+  if (config.cameras.size() > 1) {
+    for (const Config::Camera& cam : config.cameras)
+      o->camera_keys_.push_back("camera " + cam.name);
+  }
   const Config::Extrinsics& e = config.extrinsics;
   o->geometry_.reset(new (std::nothrow) PoseGeometry(
       RigidTransform::from_xyz_rpy(e.sensor_xyz, e.sensor_rpy_deg),
@@ -163,10 +167,14 @@ void PoseOutputs::publish_status(const StatusSnapshot& s, int64_t realtime_ns) n
     kCanProblem,
     kCount
   };
-  static const char* const keys[kCount] = {
+  static const char* const kKeys[kCount] = {
       "state",          "reason",       "poses", "flagged",       "last_flags",  "deadline_misses",
       "frames_skipped", "inference_ms", "can",   "can_estimates", "can_dropped", "can_problem"};
-  char v[kCount][48];
+  // Multi-camera runs add "fusion" and one "camera NAME" per camera.
+  constexpr int kMax = kCount + 1 + 8;
+  const char* keys[kMax];
+  char v[kMax][48];
+  for (int i = 0; i < kCount; ++i) keys[i] = kKeys[i];
   std::snprintf(v[kState], sizeof v[0], "%s", run_state_name(s.state));
   std::snprintf(v[kReason], sizeof v[0], "%s", s.reason);
   std::snprintf(v[kPoses], sizeof v[0], "%llu", static_cast<unsigned long long>(s.poses));
@@ -189,11 +197,30 @@ void PoseOutputs::publish_status(const StatusSnapshot& s, int64_t realtime_ns) n
     v[kCanSent][0] = v[kCanDropped][0] = '\0';
     std::snprintf(v[kCanProblem], sizeof v[0], "%s", can_off_reason_.c_str());
   }
-  const char* values[kCount];
-  for (int i = 0; i < kCount; ++i) values[i] = v[i];
+  int count = kCount;
+  const FusionSummary* f = s.fusion;
+  if (!camera_keys_.empty() && f) {
+    keys[count] = "fusion";
+    std::snprintf(v[count++], sizeof v[0], "%u/%u agree, spread %.2f m %.2f deg",
+                  unsigned(f->inliers), unsigned(camera_keys_.size()), double(f->spread_m),
+                  double(f->spread_deg));
+    for (size_t i = 0; i < camera_keys_.size() && count < kMax; ++i) {
+      keys[count] = camera_keys_[i].c_str();
+      if (std::isnan(f->deviation_m[i])) {
+        std::snprintf(v[count++], sizeof v[0], "%s",
+                      i < f->cameras ? "no usable estimate" : "no cycle yet");
+      } else {
+        std::snprintf(v[count++], sizeof v[0], "%s %.2f m %.2f deg",
+                      (f->inlier_mask >> i) & 1 ? "inlier" : "outlier", double(f->deviation_m[i]),
+                      double(f->deviation_deg[i]));
+      }
+    }
+  }
+  const char* values[kMax];
+  for (int i = 0; i < count; ++i) values[i] = v[i];
   char message[128];
   std::snprintf(message, sizeof message, "%s: %s", run_state_name(s.state), s.reason);
-  if (dds_->publish_status(realtime_ns, diagnostic_level(s.state), message, keys, values, kCount)) {
+  if (dds_->publish_status(realtime_ns, diagnostic_level(s.state), message, keys, values, count)) {
     ++stats_.dds_status;
   } else {
     ++stats_.dds_errors;

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "drivers/can/pose_can_sender.h"
 #include "drivers/can/socketcan.h"
@@ -37,6 +38,7 @@ struct StatusSnapshot {
   uint64_t poses = 0, flagged = 0, deadline_misses = 0, frames_skipped = 0;
   uint32_t last_flags = 0;
   double last_inference_ms = 0;
+  const FusionSummary* fusion = nullptr;  // the last cycle's (multi-camera runs)
 };
 
 class PoseOutputs {
@@ -68,6 +70,7 @@ class PoseOutputs {
   BasePose last_{};
   OutputStats stats_;
   std::string dds_off_reason_, can_off_reason_;
+  std::vector<std::string> camera_keys_;  // "camera NAME" per fused camera
 };
 
 }  // namespace aprt

@@ -11,9 +11,19 @@ namespace aprt {
 inline constexpr uint32_t kPoseStaleFrame = 1u << 8;      // frame older than frame_timeout
 inline constexpr uint32_t kPoseDeadlineMissed = 1u << 9;  // inference over its deadline
 inline constexpr uint32_t kPoseJump = 1u << 10;           // implausible jump from the last pose
+inline constexpr uint32_t kPoseNoQuorum = 1u << 11;       // cameras disagree: no majority (fusion)
 
 enum class RunState : uint8_t { kStarting, kRunning, kDegraded, kFault, kStopping };
 const char* run_state_name(RunState s);
+
+// A fusion cycle as the diagnostics show it (multi-camera runs only).
+struct FusionSummary {
+  uint8_t cameras = 0;  // configured; 0 or 1: no fusion
+  uint8_t present = 0, usable = 0, inliers = 0;
+  uint8_t inlier_mask = 0;
+  float deviation_m[8] = {}, deviation_deg[8] = {};  // NaN: no usable estimate
+  float spread_m = 0, spread_deg = 0;
+};
 
 struct PoseRecord {
   uint64_t index = 0;           // n-th pose of this run
@@ -29,6 +39,7 @@ struct PoseRecord {
   double truth_position[3] = {};
   double truth_orientation[4] = {1, 0, 0, 0};
   char name[128] = {};
+  FusionSummary fusion;
 };
 
 }  // namespace aprt

@@ -87,51 +87,74 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
                  config.fault_injection.size());
   }
 
-  int width = 0, height = 0;
-  size_t frames = 0;
-  kernels::PixelFormat format = kernels::PixelFormat::kRgb24;
-  if (config.source.type == "replay") {
-    ReplayPacing pacing{config.source.replay.rate_hz, config.source.replay.recorded,
-                        config.source.replay.loop, uint64_t(config.source.replay.frames)};
-    auto replay = ReplaySource::open(config.source.replay.path.c_str(), pacing);
-    if (!replay) return replay.error();
-    width = replay.value()->replay().width();
-    height = replay.value()->replay().height();
-    frames = replay.value()->replay().size();
-    r->source_ = std::move(replay.value());
-  } else if (config.source.type == "v4l2") {
-    const Config::Source::V4l2& v = config.source.v4l2;
-    V4l2Options vo;
-    vo.device = v.device;
-    vo.width = v.width;
-    vo.height = v.height;
-    vo.format = v.format;
-    vo.fps = v.fps;
-    vo.buffers = v.buffers;
-    auto cam = V4l2Source::create(vo);
-    if (!cam) return cam.error();
-    width = v.width;
-    height = v.height;
-    format = cam.value()->format();
-    r->source_ = std::move(cam.value());
-  } else {
-    return Error(Errc::kUnsupported, "run: source type '%s' is not available in this build yet",
-                 config.source.type.c_str());
+  const std::vector<Config::Camera> cams = camera_list(config);
+  if (cams.size() > size_t(kMaxFusedCameras)) {
+    return Error(Errc::kInvalidArgument, "run: at most %d cameras", kMaxFusedCameras);
   }
-
-  auto slot = FrameSlot::create(r->source_->max_frame_bytes());
-  if (!slot) return slot.error();
-  r->slot_ = std::move(slot.value());
-  if (config.source.type == "replay" && config.source.replay.rate_hz == 0 &&
-      !config.source.replay.recorded) {
-    static_cast<ReplaySource*>(r->source_.get())->pace_with(r->slot_.get());
-  }
-  const ModelMeta& m = r->engine_->meta();
-  const kernels::PreprocessParams pp = preprocess_params(m);
-  r->plan_.reset(new (std::nothrow) kernels::PreprocessPlan());
-  if (!r->plan_ || !kernels::plan_preprocess(pp, format, width, height, r->plan_.get())) {
-    return Error(Errc::kInvalidArgument, "run: cannot map %dx%d frames to the model's %dx%d input",
-                 width, height, pp.size, pp.size);
+  size_t frames = 0;  // the first replay's length
+  const kernels::PreprocessParams pp = preprocess_params(r->engine_->meta());
+  for (size_t i = 0; i < cams.size(); ++i) {
+    const Config::Camera& cam = cams[i];
+    auto ch = std::unique_ptr<Channel>(new (std::nothrow) Channel());
+    if (!ch) return Error(Errc::kOutOfMemory, "run: out of memory");
+    ch->owner = r.get();
+    ch->index = i;
+    ch->name = cam.name;
+    ch->thread_name = cams.size() == 1 ? "aprt-capture" : "aprt-cap" + std::to_string(i);
+    ch->source_type = cam.source.type;
+    ch->base_from_sensor =
+        RigidTransform::from_xyz_rpy(cam.sensor_xyz, cam.sensor_rpy_deg).isometry();
+    int width = 0, height = 0;
+    kernels::PixelFormat format = kernels::PixelFormat::kRgb24;
+    const Config::Source& src = cam.source;
+    if (src.type == "replay") {
+      ReplayPacing pacing{src.replay.rate_hz, src.replay.recorded, src.replay.loop,
+                          uint64_t(src.replay.frames)};
+      auto replay = ReplaySource::open(src.replay.path.c_str(), pacing);
+      if (!replay) {
+        if (cams.size() == 1) return replay.error();
+        return Error(Errc::kInvalidArgument, "run: camera %s: %s", cam.name.c_str(),
+                     replay.error().message());
+      }
+      width = replay.value()->replay().width();
+      height = replay.value()->replay().height();
+      if (i == 0) frames = replay.value()->replay().size();
+      ch->source = std::move(replay.value());
+    } else if (src.type == "v4l2") {
+      V4l2Options vo;
+      vo.device = src.v4l2.device;
+      vo.width = src.v4l2.width;
+      vo.height = src.v4l2.height;
+      vo.format = src.v4l2.format;
+      vo.fps = src.v4l2.fps;
+      vo.buffers = src.v4l2.buffers;
+      auto dev = V4l2Source::create(vo);
+      if (!dev) {
+        if (cams.size() == 1) return dev.error();
+        return Error(Errc::kInvalidArgument, "run: camera %s: %s", cam.name.c_str(),
+                     dev.error().message());
+      }
+      width = src.v4l2.width;
+      height = src.v4l2.height;
+      format = dev.value()->format();
+      ch->source = std::move(dev.value());
+    } else {
+      return Error(Errc::kUnsupported, "run: source type '%s' is not available in this build yet",
+                   src.type.c_str());
+    }
+    auto slot = FrameSlot::create(ch->source->max_frame_bytes());
+    if (!slot) return slot.error();
+    ch->slot = std::move(slot.value());
+    if (src.type == "replay" && src.replay.rate_hz == 0 && !src.replay.recorded) {
+      static_cast<ReplaySource*>(ch->source.get())->pace_with(ch->slot.get());
+    }
+    ch->plan.reset(new (std::nothrow) kernels::PreprocessPlan());
+    if (!ch->plan || !kernels::plan_preprocess(pp, format, width, height, ch->plan.get())) {
+      return Error(Errc::kInvalidArgument,
+                   "run: camera %s: cannot map %dx%d frames to the model's %dx%d input",
+                   cam.name.c_str(), width, height, pp.size, pp.size);
+    }
+    r->cameras_.push_back(std::move(ch));
   }
   auto outputs = PoseOutputs::create(config, r->engine_->meta());
   if (!outputs) return outputs.error();
@@ -168,14 +191,23 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
 
 Runtime::~Runtime() {
   request_stop();
-  pthread_t* ts[3] = {&capture_, &inference_, &publish_};
-  for (int i = 0; i < 3; ++i) {
-    if (threads_started_[i]) pthread_join(*ts[i], nullptr);
-  }
+  join_threads();
   if (watchdog_fd_ >= 0) close(watchdog_fd_);
 }
 
-Status Runtime::start_thread(pthread_t* t, void* (*fn)(void*), const ThreadConfig& tc,
+void Runtime::join_threads() {
+  for (auto& c : cameras_) {
+    if (c->started) pthread_join(c->thread, nullptr);
+    c->started = false;
+  }
+  pthread_t* ts[2] = {&inference_, &publish_};
+  for (int i = 0; i < 2; ++i) {
+    if (threads_started_[i]) pthread_join(*ts[i], nullptr);
+    threads_started_[i] = false;
+  }
+}
+
+Status Runtime::start_thread(pthread_t* t, void* (*fn)(void*), void* arg, const ThreadConfig& tc,
                              const char* name) {
   pthread_attr_t attr;
   pthread_attr_init(&attr);
@@ -186,14 +218,14 @@ Status Runtime::start_thread(pthread_t* t, void* (*fn)(void*), const ThreadConfi
     pthread_attr_setschedpolicy(&attr, SCHED_FIFO);
     pthread_attr_setschedparam(&attr, &sp);
   }
-  int rc = pthread_create(t, &attr, fn, this);
+  int rc = pthread_create(t, &attr, fn, arg);
   if (rc == EPERM && tc.priority > 0) {
     std::fprintf(stderr,
                  "aprt run: warning: no permission for SCHED_FIFO priority %d on the %s thread "
                  "(needs CAP_SYS_NICE or an rtprio limit); running it with normal scheduling\n",
                  tc.priority, name);
     pthread_attr_setinheritsched(&attr, PTHREAD_INHERIT_SCHED);
-    rc = pthread_create(t, &attr, fn, this);
+    rc = pthread_create(t, &attr, fn, arg);
   }
   pthread_attr_destroy(&attr);
   if (rc != 0)
@@ -211,8 +243,9 @@ Status Runtime::start_thread(pthread_t* t, void* (*fn)(void*), const ThreadConfi
   return ok();
 }
 
-void* Runtime::capture_main(void* self) {
-  static_cast<Runtime*>(self)->capture_loop();
+void* Runtime::channel_main(void* channel) {
+  Channel* c = static_cast<Channel*>(channel);
+  c->owner->capture_loop(*c);
   return nullptr;
 }
 void* Runtime::inference_main(void* self) {
@@ -224,60 +257,97 @@ void* Runtime::publish_main(void* self) {
   return nullptr;
 }
 
-void Runtime::capture_loop() {
-  const bool device = config_.source.type != "replay";
-  if (Status s = source_->start(); !s) {
-    std::fprintf(stderr, "aprt run: %s%s\n", s.error().message(),
+void Runtime::capture_loop(Channel& c) {
+  const bool device = !c.replay();
+  const bool primary = c.index == 0;  // deliberate camera stalls hit the trigger camera
+  if (Status s = c.source->start(); !s) {
+    std::fprintf(stderr, "aprt run: %s%s%s%s\n", cameras_.size() > 1 ? c.name.c_str() : "",
+                 cameras_.size() > 1 ? ": " : "", s.error().message(),
                  device ? " (retrying with back-off)" : "");
-    source_failed_.store(true);
+    c.failed.store(true);
     if (!device) {  // a replay that cannot start will not start later
-      capture_done_.store(true);
+      c.done.store(true);
       return;
     }
   }
   while (!stop_.load(std::memory_order_acquire)) {
-    capture_beat_.store(monotonic_ns(), std::memory_order_release);
-    switch (source_->next(&slot_->back(), kWaitNs)) {
-      case SourceResult::kFrame:
-        if (!source_->driver_timestamps()) {
-          slot_->back().info.capture_ns = monotonic_ns();  // arrival, for frame age
+    c.beat.store(monotonic_ns(), std::memory_order_release);
+    switch (c.source->next(&c.slot->back(), kWaitNs)) {
+      case SourceResult::kFrame: {
+        if (!c.source->driver_timestamps()) {
+          c.slot->back().info.capture_ns = monotonic_ns();  // arrival, for frame age
         }
-        slot_->publish();
-        if (const int64_t stall = faults_.stall_ns(frames_captured_.fetch_add(1))) {
+        c.slot->back().info.source = uint32_t(c.index);
+        c.slot->publish();
+        const uint64_t n = c.captured.fetch_add(1);
+        if (const int64_t stall = primary ? faults_.stall_ns(n) : 0) {
           // The camera delivers nothing; the thread stays alive and keeps beating.
           const int64_t until = monotonic_ns() + stall;
           while (!stop_.load(std::memory_order_acquire) && monotonic_ns() < until) {
             const timespec ts{0, 5000000};
             nanosleep(&ts, nullptr);
-            capture_beat_.store(monotonic_ns(), std::memory_order_release);
+            c.beat.store(monotonic_ns(), std::memory_order_release);
           }
         }
-        if (source_failed_.exchange(false, std::memory_order_acq_rel)) {
-          std::fprintf(stderr, "aprt run: %s delivers frames again\n", source_->name());
+        if (c.failed.exchange(false, std::memory_order_acq_rel)) {
+          std::fprintf(stderr, "aprt run: %s delivers frames again\n", c.source->name());
         }
         break;
+      }
       case SourceResult::kTimeout: break;
       case SourceResult::kSkipped:
         frames_skipped_.fetch_add(1, std::memory_order_relaxed);
-        std::fprintf(stderr, "aprt run: frame skipped: %s\n", source_->error().message());
+        std::fprintf(stderr, "aprt run: frame skipped: %s\n", c.source->error().message());
         break;
-      case SourceResult::kEndOfStream: capture_done_.store(true, std::memory_order_release); return;
+      case SourceResult::kEndOfStream: c.done.store(true, std::memory_order_release); return;
       case SourceResult::kFailed:
-        if (!source_failed_.exchange(true, std::memory_order_acq_rel)) {
-          std::fprintf(stderr, "aprt run: %s\n", source_->error().message());
+        if (!c.failed.exchange(true, std::memory_order_acq_rel)) {
+          std::fprintf(stderr, "aprt run: %s\n", c.source->error().message());
         }
         break;
     }
   }
-  capture_done_.store(true, std::memory_order_release);
+  c.done.store(true, std::memory_order_release);
 }
+
+const FrameBuffer* Runtime::take_frame(Channel& c, int64_t deadline_ns) noexcept {
+  const FrameBuffer* f = nullptr;
+  for (;;) {
+    const uint32_t seen = c.slot->published();
+    if (c.slot->take(&f)) break;
+    const int64_t left = deadline_ns - monotonic_ns();
+    if (left <= 0 || c.done.load(std::memory_order_acquire)) return nullptr;
+    c.slot->wait(seen, std::min(left, kWaitNs));
+  }
+  if (c.replay()) static_cast<ReplaySource*>(c.source.get())->note_taken(f->info.sequence + 1);
+  return f;
+}
+
+namespace {
+
+// Re-plans preprocessing when a frame's geometry or format changed (a camera
+// renegotiated); false if the frame cannot be mapped to the model's input.
+bool fit_plan(kernels::PreprocessPlan* plan, const FrameBuffer& f) {
+  if (f.info.width == plan->width && f.info.height == plan->height &&
+      f.info.format == plan->format) {
+    return true;
+  }
+  return kernels::plan_preprocess(plan->params, f.info.format, f.info.width, f.info.height, plan);
+}
+
+}  // namespace
 
 void Runtime::inference_loop() {
   Engine* e = engine_.get();
   const int64_t stale_ns = int64_t(config_.supervisor.frame_timeout_ms * 1e6);
   const int64_t deadline_ns = int64_t(config_.supervisor.inference_deadline_ms * 1e6);
-  auto* replay =
-      config_.source.type == "replay" ? static_cast<ReplaySource*>(source_.get()) : nullptr;
+  const int64_t skew_ns = int64_t(config_.fusion.max_frame_skew_ms * 1e6);
+  const size_t n_cams = cameras_.size();
+  Channel& trigger = *cameras_[0];
+  FusionParams fp;
+  fp.max_position_spread_m = config_.fusion.max_position_spread_m;
+  fp.max_orientation_spread_rad = config_.fusion.max_orientation_spread_deg * M_PI / 180.0;
+  fp.min_agreeing = config_.fusion.min_agreeing;
   uint64_t index = 0;
   bool have_prev = false;
   double prev[3] = {};
@@ -285,16 +355,17 @@ void Runtime::inference_loop() {
   while (!stop_.load(std::memory_order_acquire)) {
     inference_beat_.store(monotonic_ns(), std::memory_order_release);
     const FrameBuffer* f = nullptr;
-    const uint32_t published = slot_->published();
-    if (!slot_->take(&f)) {
-      if (capture_done_.load(std::memory_order_acquire) && slot_->published() == published) {
-        if (!slot_->take(&f)) break;  // nothing left
+    const uint32_t published = trigger.slot->published();
+    if (!trigger.slot->take(&f)) {
+      if (trigger.done.load(std::memory_order_acquire) && trigger.slot->published() == published) {
+        if (!trigger.slot->take(&f)) break;  // nothing left
       } else {
-        slot_->wait(published, kWaitNs);
+        trigger.slot->wait(published, kWaitNs);
         continue;
       }
     }
-    if (replay) replay->note_taken(f->info.sequence + 1);
+    if (trigger.replay())
+      static_cast<ReplaySource*>(trigger.source.get())->note_taken(f->info.sequence + 1);
     // A reloaded model takes over here, between two frames; the old one goes
     // back to the supervisor, which frees it (never this thread).
     if (Engine* next = pending_.exchange(nullptr, std::memory_order_acq_rel)) {
@@ -309,13 +380,20 @@ void Runtime::inference_loop() {
     rec.source = f->info.source;
     uint32_t flags = 0;
     if (rec.inference_start_ns - f->info.capture_ns > stale_ns) flags |= kPoseStaleFrame;
-    if (f->info.width != plan_->width || f->info.height != plan_->height ||
-        f->info.format != plan_->format) {
-      if (!kernels::plan_preprocess(plan_->params, f->info.format, f->info.width, f->info.height,
-                                    plan_.get())) {
-        frames_skipped_.fetch_add(1, std::memory_order_relaxed);
-        continue;
-      }
+    if (!fit_plan(trigger.plan.get(), *f)) {
+      frames_skipped_.fetch_add(1, std::memory_order_relaxed);
+      continue;
+    }
+    // The other cameras' frames of this cycle: each one's newest, waited for
+    // up to the skew after the trigger frame was taken.
+    const FrameBuffer* frames[kMaxFusedCameras] = {f};
+    for (size_t i = 1; i < n_cams; ++i) {
+      Channel& c = *cameras_[i];
+      const FrameBuffer* g = take_frame(c, rec.inference_start_ns + skew_ns);
+      if (g && std::llabs(g->info.capture_ns - f->info.capture_ns) > skew_ns) g = nullptr;
+      if (g && !fit_plan(c.plan.get(), *g)) g = nullptr;
+      if (!g) ++c.missing;
+      frames[i] = g;
     }
     if (const int64_t hang = faults_.hang_ns(index)) {
       // A hung stage: no beat, so the supervisor must see it (FAULT, watchdog unpetted).
@@ -325,14 +403,55 @@ void Runtime::inference_loop() {
         nanosleep(&ts, nullptr);
       }
     }
-    kernels::preprocess_image(*plan_, f->view(), e->input().f32());
-    (void)e->run();
+    const float margin = float(config_.sanity.bounds_margin);
+    CameraEstimate est[kMaxFusedCameras];
+    for (size_t i = 0; i < n_cams; ++i) {
+      if (!frames[i]) continue;
+      kernels::preprocess_image(*cameras_[i]->plan, frames[i]->view(), e->input().f32());
+      (void)e->run();
+      if (i == 0 && faults_.nan_output(index)) {
+        e->output().f32()[0] = std::numeric_limits<float>::quiet_NaN();
+      }
+      const PoseEstimate p = decode_pose(e->output().f32(), m, margin);
+      if (n_cams == 1) {
+        rec.pose = p;
+        break;
+      }
+      if (p.flags) ++cameras_[i]->flagged;
+      est[i] = camera_to_base(p, cameras_[i]->base_from_sensor);
+    }
+    if (n_cams > 1) {
+      const FusionResult fr = fuse_poses(est, int(n_cams), fp);
+      // The outputs take the trigger camera's pose (its extrinsic brings it
+      // back to this base_link, their map offset applies once).
+      rec.pose = base_to_sensor(fr.position, fr.orientation, trigger.base_from_sensor);
+      if (!fr.valid) {
+        uint32_t camera_flags = 0;
+        for (size_t i = 0; i < n_cams; ++i) camera_flags |= est[i].present ? est[i].flags : 0;
+        rec.pose.flags = camera_flags;
+        flags |= kPoseNoQuorum;
+        ++fusion_no_quorum_;
+      }
+      FusionSummary& fs = rec.fusion;
+      fs.cameras = uint8_t(n_cams);
+      fs.present = uint8_t(fr.present);
+      fs.usable = uint8_t(fr.usable);
+      fs.inliers = uint8_t(fr.inliers);
+      fs.inlier_mask = fr.inlier_mask;
+      fs.spread_m = float(fr.spread_m);
+      fs.spread_deg = float(fr.spread_deg);
+      for (size_t i = 0; i < n_cams; ++i) {
+        fs.deviation_m[i] = float(fr.deviation_m[i]);
+        fs.deviation_deg[i] = float(fr.deviation_deg[i]);
+        if (est[i].present && est[i].flags == 0 && !(fr.inlier_mask & (1u << i))) {
+          ++cameras_[i]->outliers;
+        }
+      }
+    }
     if (const int64_t overrun = faults_.overrun_ns(index)) {
       const timespec ts{time_t(overrun / 1000000000), long(overrun % 1000000000)};
       nanosleep(&ts, nullptr);
     }
-    if (faults_.nan_output(index)) e->output().f32()[0] = std::numeric_limits<float>::quiet_NaN();
-    rec.pose = decode_pose(e->output().f32(), m, float(config_.sanity.bounds_margin));
     rec.inference_end_ns = monotonic_ns();
     if (save_index_ >= 0 && uint64_t(save_index_) == index) write_saved_frame(*f, rec, *e);
     flags |= rec.pose.flags;
@@ -350,7 +469,7 @@ void Runtime::inference_loop() {
         flags |= kPoseJump;
       }
     }
-    if (!(flags & (kPoseNonFinite | kPoseOutOfBounds | kPoseJump))) {
+    if (!(flags & (kPoseNonFinite | kPoseOutOfBounds | kPoseJump | kPoseNoQuorum))) {
       for (int k = 0; k < 3; ++k) prev[k] = rec.pose.position[k];
       prev_ns = rec.capture_ns;
       have_prev = true;
@@ -379,6 +498,14 @@ void Runtime::print_pose(const PoseRecord& r) {
   if (r.flags & kPoseDeadlineMissed)
     std::strncat(flags, ",late", sizeof flags - std::strlen(flags) - 1);
   if (r.flags & kPoseJump) std::strncat(flags, ",jump", sizeof flags - std::strlen(flags) - 1);
+  if (r.flags & kPoseNoQuorum)
+    std::strncat(flags, ",no-quorum", sizeof flags - std::strlen(flags) - 1);
+  if (r.fusion.cameras > 1) {  // agreeing / configured cameras
+    char cams[24];
+    std::snprintf(cams, sizeof cams, " cams %u/%u", unsigned(r.fusion.inliers),
+                  unsigned(r.fusion.cameras));
+    std::strncat(flags, cams, sizeof flags - std::strlen(flags) - 1);
+  }
   if (std::strncmp(flags, "ok,", 3) == 0)
     std::memmove(flags, flags + 3, std::strlen(flags + 3) + 1);
   const double t = double(r.capture_ns - started_ns_) * 1e-9;
@@ -405,6 +532,7 @@ void Runtime::publish_loop() {
   const int64_t status_period = int64_t(1e9 / config_.output.status_rate_hz);
   int64_t next_status = monotonic_ns();
   double last_inference_ms = 0;
+  FusionSummary last_fusion;
   for (;;) {
     publish_beat_.store(monotonic_ns(), std::memory_order_release);
     if (monotonic_ns() >= next_status) {
@@ -418,6 +546,7 @@ void Runtime::publish_loop() {
       st.frames_skipped = frames_skipped_.load(std::memory_order_relaxed);
       st.last_flags = last_flags_.load(std::memory_order_relaxed);
       st.last_inference_ms = last_inference_ms;
+      st.fusion = &last_fusion;
       outputs_->publish_status(st, realtime_ns());
     }
     if (!ring_->pop(&r)) {
@@ -438,6 +567,7 @@ void Runtime::publish_loop() {
     output_errors_.store(outputs_->stats().dds_errors + injected_publish_failures_,
                          std::memory_order_release);
     last_inference_ms = double(r.inference_end_ns - r.inference_start_ns) * 1e-6;
+    last_fusion = r.fusion;
     if (timing_count_ < timings_.size()) {
       timings_[timing_count_++] = {r.capture_ns, r.inference_start_ns, r.inference_end_ns, now};
     }
@@ -477,6 +607,20 @@ void Runtime::print_summary() {
         percentile(e2e, 0.5), percentile(e2e, 0.99), percentile(e2e, 1.0), engine_->isa(),
         engine_->threads());
   }
+  if (cameras_.size() > 1) {
+    std::printf("fusion: %zu cameras; %llu of %llu cycles without a quorum\n", cameras_.size(),
+                static_cast<unsigned long long>(stats_.fusion_no_quorum),
+                static_cast<unsigned long long>(stats_.poses));
+    for (size_t i = 0; i < cameras_.size(); ++i) {
+      const RunStats::Camera& c = stats_.cameras[i];
+      std::printf(
+          "  camera %s: %llu frames, %llu dropped as stale, %llu cycles without a frame in time, "
+          "%llu estimates flagged, %llu rejected as outliers\n",
+          cameras_[i]->name.c_str(), static_cast<unsigned long long>(c.frames),
+          static_cast<unsigned long long>(c.dropped), static_cast<unsigned long long>(c.missing),
+          static_cast<unsigned long long>(c.flagged), static_cast<unsigned long long>(c.outliers));
+    }
+  }
   pos_errors_.resize(error_count_);  // after the run: the summary may allocate
   rot_errors_.resize(error_count_);
   if (!pos_errors_.empty()) {
@@ -498,17 +642,26 @@ int Runtime::run() {
                  std::strerror(errno));
   }
   started_ns_ = monotonic_ns();
-  capture_beat_ = inference_beat_ = publish_beat_ = started_ns_;
+  inference_beat_ = publish_beat_ = started_ns_;
+  for (auto& c : cameras_) c->beat = started_ns_;
   Status s;
-  if (!(s = start_thread(&publish_, publish_main, config_.threads.publish, "aprt-publish")) ||
-      !(threads_started_[2] = true) ||
-      !(s = start_thread(&inference_, inference_main, config_.threads.inference, "aprt-infer")) ||
+  if (!(s = start_thread(&publish_, publish_main, this, config_.threads.publish, "aprt-publish")) ||
       !(threads_started_[1] = true) ||
-      !(s = start_thread(&capture_, capture_main, config_.threads.capture, "aprt-capture")) ||
+      !(s = start_thread(&inference_, inference_main, this, config_.threads.inference,
+                         "aprt-infer")) ||
       !(threads_started_[0] = true)) {
     std::fprintf(stderr, "aprt run: %s\n", s.error().message());
     request_stop();
     return 1;
+  }
+  for (auto& c : cameras_) {
+    if (!(s = start_thread(&c->thread, channel_main, c.get(), config_.threads.capture,
+                           c->thread_name.c_str()))) {
+      std::fprintf(stderr, "aprt run: %s\n", s.error().message());
+      request_stop();
+      return 1;
+    }
+    c->started = true;
   }
   if (config_.supervisor.systemd) sd_notify_text("READY=1\nSTATUS=STARTING");
   const int64_t period = int64_t(1e9 / config_.supervisor.rate_hz);
@@ -523,15 +676,23 @@ int Runtime::run() {
     h.now_ns = monotonic_ns();
     h.started_ns = started_ns_;
     h.last_frame_ns = last_frame_ns_.load(std::memory_order_acquire);
-    const bool capture_done = capture_done_.load(std::memory_order_acquire);
+    // The trigger camera's end ends the run; a stalled capture thread of any
+    // camera is a stalled stage; any camera failing is a failing source.
+    const bool capture_done = cameras_[0]->done.load(std::memory_order_acquire);
     const bool inference_done = inference_done_.load(std::memory_order_acquire);
-    h.capture_beat_ns = capture_done ? h.now_ns : capture_beat_.load(std::memory_order_acquire);
+    h.capture_beat_ns = h.now_ns;
+    h.source_failed = false;
+    for (const auto& c : cameras_) {
+      if (!c->done.load(std::memory_order_acquire)) {
+        h.capture_beat_ns = std::min(h.capture_beat_ns, c->beat.load(std::memory_order_acquire));
+      }
+      h.source_failed = h.source_failed || c->failed.load(std::memory_order_acquire);
+    }
     h.inference_beat_ns =
         inference_done ? h.now_ns : inference_beat_.load(std::memory_order_acquire);
     h.publish_beat_ns = publish_beat_.load(std::memory_order_acquire);
     h.poses = poses_.load(std::memory_order_acquire);
     h.last_flags = last_flags_.load(std::memory_order_acquire);
-    h.source_failed = source_failed_.load(std::memory_order_acquire);
     h.output_errors = output_errors_.load(std::memory_order_acquire);
     h.end_of_stream = capture_done && inference_done && ring_->size() == 0;
     if (capture_done && h.last_frame_ns)
@@ -572,11 +733,7 @@ int Runtime::run() {
     }
   }
   request_stop();
-  pthread_t* ts[3] = {&capture_, &inference_, &publish_};
-  for (int i = 0; i < 3; ++i) {
-    if (threads_started_[i]) pthread_join(*ts[i], nullptr);
-    threads_started_[i] = false;
-  }
+  join_threads();
   end_ = {true, allocation_count_ ? allocation_count_() : 0, current_rss_kb()};
   // A reload the inference thread did not reach, or reached after the last tick.
   service_reload();
@@ -588,9 +745,15 @@ int Runtime::run() {
       std::fprintf(stderr, "aprt run: warning: watchdog magic close failed\n");
     }
   }
-  stats_.frames_captured = frames_captured_.load();
+  stats_.frames_captured = cameras_[0]->captured.load();
   stats_.frames_skipped = frames_skipped_.load();
-  stats_.frames_dropped = slot_->dropped();
+  stats_.frames_dropped = cameras_[0]->slot->dropped();
+  stats_.fusion_no_quorum = fusion_no_quorum_;
+  stats_.cameras.clear();
+  for (const auto& c : cameras_) {
+    stats_.cameras.push_back(
+        {c->captured.load(), c->missing, c->flagged, c->outliers, c->slot->dropped()});
+  }
   stats_.poses = poses_.load();
   stats_.poses_flagged = poses_flagged_.load();
   stats_.deadline_misses = deadline_misses_.load();

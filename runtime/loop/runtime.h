@@ -1,8 +1,13 @@
 // The supervised real-time loop that `aprt run` is:
 //
-//   capture thread    source.next() -> FrameSlot (latest frame, drops stale)
+//   capture threads   one per camera: source.next() -> its FrameSlot (latest
+//                     frame, drops stale)
 //   inference thread  FrameSlot -> preprocess -> Engine::run -> decode_pose
-//                     -> sanity flags -> PoseRecord ring
+//                     -> sanity flags -> PoseRecord ring; with several cameras
+//                     the first camera's frame starts a cycle, the others'
+//                     newest frames (waited for up to fusion.max_frame_skew_ms)
+//                     run back to back through the same engine, and their
+//                     base_link poses are fused (runtime/pose/pose_fusion.h)
 //   publish thread    PoseRecord ring -> console, base_link geometry, DDS, CAN;
 //                     status (DiagnosticArray) at output.status_rate_hz
 //   supervisor        the calling thread: health at a fixed rate, state,
@@ -31,6 +36,7 @@
 #include "runtime/loop/spsc_ring.h"
 #include "runtime/loop/supervisor.h"
 #include "runtime/loop/timing_report.h"
+#include "runtime/pose/pose_fusion.h"
 
 namespace aprt {
 
@@ -52,6 +58,14 @@ struct RunStats {
   uint64_t source_restarts = 0;
   uint64_t reloads = 0, reloads_refused = 0;
   uint64_t publish_failures_injected = 0;
+  // Multi-camera runs: fusion cycles without a quorum, and per camera
+  // (configuration order) frames captured, cycles it had no frame in time,
+  // estimates flagged, and estimates rejected as outliers.
+  uint64_t fusion_no_quorum = 0;
+  struct Camera {
+    uint64_t frames = 0, missing = 0, flagged = 0, outliers = 0, dropped = 0;
+  };
+  std::vector<Camera> cameras;
 };
 
 class Runtime {
@@ -113,7 +127,32 @@ class Runtime {
   void print_pose(const PoseRecord& r);
   void print_summary();
   void service_reload();  // supervisor thread
-  Status start_thread(pthread_t* t, void* (*fn)(void*), const ThreadConfig& tc, const char* name);
+  Status start_thread(pthread_t* t, void* (*fn)(void*), void* arg, const ThreadConfig& tc,
+                      const char* name);
+
+  // One camera: its source, frame slot, preprocessing and mounting.
+  struct Channel {
+    Runtime* owner = nullptr;
+    size_t index = 0;
+    std::string name, thread_name;
+    std::string source_type;
+    std::unique_ptr<FrameSource> source;
+    std::unique_ptr<FrameSlot> slot;
+    std::unique_ptr<kernels::PreprocessPlan> plan;
+    Eigen::Isometry3d base_from_sensor = Eigen::Isometry3d::Identity();
+    std::atomic<bool> done{false}, failed{false};
+    std::atomic<int64_t> beat{0};
+    std::atomic<uint64_t> captured{0};
+    uint64_t missing = 0, flagged = 0, outliers = 0;  // inference thread
+    pthread_t thread{};
+    bool started = false;
+    bool replay() const { return source_type == "replay"; }
+  };
+  static void* channel_main(void* channel);
+  void capture_loop(Channel& c);
+  // Inference thread: the frame of camera `i` for this cycle, waiting for it
+  // until `deadline_ns`; null if none came (camera missing from the cycle).
+  const FrameBuffer* take_frame(Channel& c, int64_t deadline_ns) noexcept;
 
   Config config_;
   std::unique_ptr<Engine> engine_;  // the model inference runs (owned by the supervisor side)
@@ -122,24 +161,20 @@ class Runtime {
   std::atomic<Engine*> retired_{nullptr};  // inference -> supervisor: no longer used
   std::atomic<bool> reload_requested_{false};
   uint64_t reloads_ = 0, reloads_refused_ = 0;
-  std::unique_ptr<FrameSource> source_;
-  std::unique_ptr<FrameSlot> slot_;
-  std::unique_ptr<kernels::PreprocessPlan> plan_;
+  std::vector<std::unique_ptr<Channel>> cameras_;  // [0] is the trigger
   std::unique_ptr<SpscRing<PoseRecord, 64>> ring_;
   std::unique_ptr<PoseOutputs> outputs_;
   Supervisor supervisor_{Config::Supervisor{}};
 
   std::atomic<bool> stop_{false};
-  std::atomic<bool> capture_done_{false};
   std::atomic<bool> inference_done_{false};
-  std::atomic<bool> source_failed_{false};
-  std::atomic<int64_t> capture_beat_{0}, inference_beat_{0}, publish_beat_{0};
+  std::atomic<int64_t> inference_beat_{0}, publish_beat_{0};
   std::atomic<int64_t> last_frame_ns_{0};
   std::atomic<uint64_t> poses_{0};
   std::atomic<uint32_t> last_flags_{0};
   std::atomic<uint8_t> state_{uint8_t(RunState::kStarting)};
   std::atomic<const char*> reason_{"starting"};  // static strings of the supervisor
-  std::atomic<uint64_t> frames_captured_{0}, frames_skipped_{0}, ring_full_{0};
+  std::atomic<uint64_t> frames_skipped_{0}, ring_full_{0};
   std::atomic<uint64_t> poses_flagged_{0}, deadline_misses_{0};
   std::atomic<uint64_t> published_{0};
   std::atomic<uint64_t> output_errors_{0};
@@ -159,8 +194,10 @@ class Runtime {
   static constexpr uint64_t kRssWarmupPoses = 1000;
   double duration_s_ = 0;
 
-  pthread_t capture_{}, inference_{}, publish_{};
-  bool threads_started_[3] = {};
+  pthread_t inference_{}, publish_{};
+  bool threads_started_[2] = {};
+  uint64_t fusion_no_quorum_ = 0;  // inference thread
+  void join_threads();
   int64_t started_ns_ = 0;
   std::vector<TimingRecord> timings_;
   size_t timing_count_ = 0;

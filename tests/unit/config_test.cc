@@ -129,6 +129,64 @@ TEST(Config, FaultInjectionAndSigning) {
 }
 
 // The files the repository and the package ship must stay valid as the schema grows.
+TEST(Config, Cameras) {
+  auto c = parse_config(R"(
+model: m.aprt
+cameras:
+  - name: front
+    source: {type: v4l2, v4l2: {device: /dev/video0, format: MJPEG}}
+    sensor_to_base_link: {xyz: [1.5, 0, 1.6]}
+  - name: left
+    source: {type: v4l2, v4l2: {device: /dev/video1}}
+    sensor_to_base_link: {xyz: [1.3, 0.6, 1.6], rpy_deg: [0, 0, 60]}
+fusion: {max_position_spread_m: 3, min_agreeing: 2, max_frame_skew_ms: 15}
+)",
+                        "test.yaml");
+  ASSERT_TRUE(c) << c.error().message();
+  ASSERT_EQ(c->cameras.size(), 2u);
+  EXPECT_EQ(c->cameras[1].name, "left");
+  EXPECT_EQ(c->cameras[1].source.v4l2.device, "/dev/video1");
+  EXPECT_EQ(c->cameras[1].sensor_rpy_deg[2], 60.0);
+  EXPECT_EQ(c->fusion.min_agreeing, 2);
+  EXPECT_EQ(c->fusion.max_frame_skew_ms, 15.0);
+  // The first camera is mirrored into the single-camera fields.
+  EXPECT_EQ(c->source.type, "v4l2");
+  EXPECT_EQ(c->source.v4l2.format, "MJPEG");
+  EXPECT_EQ(c->extrinsics.sensor_xyz[0], 1.5);
+  EXPECT_EQ(camera_list(*c).size(), 2u);
+
+  auto one = parse_config("model: m\nsource: {replay: {path: /d}}\n", "t.yaml");
+  ASSERT_TRUE(one);
+  ASSERT_EQ(camera_list(*one).size(), 1u);
+  EXPECT_EQ(camera_list(*one)[0].source.replay.path, "/d");
+
+  const char* cam = "  - name: a\n    source: {replay: {path: /d}}\n";
+  expect_refused((std::string("model: m\nsource: {replay: {path: /d}}\ncameras:\n") + cam).c_str(),
+                 "give either `source` (one camera) or `cameras`");
+  expect_refused((std::string("model: m\ncameras:\n") + cam + cam).c_str(),
+                 "cameras[1].name: 'a' is used twice");
+  expect_refused("model: m\ncameras:\n  - name: a\n", "cameras[0].source: required");
+  expect_refused("model: m\ncameras:\n  - source: {replay: {path: /d}}\n",
+                 "cameras[0].name: required");
+  expect_refused("model: m\ncameras:\n  - name: a\n    source: {type: replay}\n",
+                 "cameras[0].source.replay.path: required");
+  expect_refused("model: m\ncameras:\n  - name: a\n    source: {replay: {path: /d, fps: 3}}\n",
+                 "test.yaml:4: cameras[0].source.replay.fps: unknown key");
+  expect_refused(
+      (std::string("model: m\nextrinsics: {sensor_to_base_link: {xyz: [1, 0, 0]}}\ncameras:\n") +
+       cam)
+          .c_str(),
+      "each camera has its own sensor_to_base_link");
+  std::string nine = "model: m\ncameras:\n";
+  for (int i = 0; i < 9; ++i) {
+    nine += "  - name: c" + std::to_string(i) + "\n    source: {replay: {path: /d}}\n";
+  }
+  expect_refused(nine.c_str(), "at most 8 cameras");
+  expect_refused("model: m\ncameras: []\n", "cameras: expected a list of cameras");
+  expect_refused("model: m\nsource: {replay: {path: /d}}\nfusion: {min_agreeing: 0}\n",
+                 "fusion.min_agreeing: expected an integer in [1, 8]");
+}
+
 TEST(Config, ShippedConfigurationsParse) {
   for (const char* name : {"config/default.yaml", "config/aprt.yaml"}) {
     auto c = load_config(std::string(APRT_SOURCE_DIR) + "/" + name);

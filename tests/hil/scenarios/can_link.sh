@@ -8,7 +8,7 @@ sleep 1
 ip link add dev vcan0 type vcan && ip link set vcan0 up
 /aprt/bin/aprt candump --interface vcan0 --timeout 3 --strict > /tmp/dump.txt 2>&1 &
 dump=$!
-sleep 1
+sleep 2
 ip link set vcan0 down
 sleep 0.6
 ip link set vcan0 up
@@ -23,6 +23,10 @@ down=$(sed -n 's/.*link down \([0-9]*\).*/\1/p' /tmp/run.txt)
 sent=$(field "estimates sent" /tmp/run.txt)
 [ "${reopened:-0}" -ge 1 ]; check "reopened once the interface appeared ($reopened)" [ $? -eq 0 ]
 [ "${down:-0}" -ge 1 ]; check "link down counted ($down)" [ $? -eq 0 ]
-[ "${sent:-0}" -ge 5 ]; check "estimates sent around the outage ($sent)" [ $? -eq 0 ]
+# Counted on the bus, not from a rate: how many poses a TCG VM infers in a
+# second depends on the host's load.
+before=$(awk '/is down/ {exit} / ctr / {n++} END {print n+0}' /tmp/dump.txt)
+[ "${before:-0}" -ge 1 ]; check "estimates received before the outage ($before)" [ $? -eq 0 ]
+[ "${sent:-0}" -gt "${before:-0}" ]; check "estimates sent after it ($sent in all)" [ $? -eq 0 ]
 tail -2 /tmp/dump.txt | grep -q ' ctr '; check "estimates arrive after the link came back" [ $? -eq 0 ]
 done_testing
