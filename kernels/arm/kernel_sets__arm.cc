@@ -20,6 +20,7 @@ void f32_attention_pack_kv__neon(int, int, int, const float*, size_t, const floa
 bool f32_attention_3x4v__neon(int, int, int, const float*, size_t, const float*, const float*, int,
                               float, float*, size_t, int, int, float*);
 size_t f32_attention_scratch__neon(int);
+void u8_f32_preprocess__neon(const PreprocessPlan&, const ImageView&, float*);
 
 namespace {
 
@@ -43,6 +44,7 @@ const KernelSet kNeon = {
     f32_attention_pack_kv__neon,
     f32_attention_3x4v__neon,
     f32_attention_scratch__neon,
+    u8_f32_preprocess__neon,
 };
 
 }  // namespace

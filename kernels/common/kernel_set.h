@@ -8,6 +8,7 @@
 #include <cstddef>
 
 #include "kernels/common/kernel_types.h"
+#include "kernels/common/preprocess_image.h"
 
 namespace aprt::kernels {
 
@@ -49,6 +50,8 @@ struct KernelSet {
                      const float* vp, int lk_pad, float scale, float* o, size_t ldo, int h, int q0,
                      float* scratch);
   size_t (*attn_scratch)(int d);  // per-thread floats for attn_block
+  // A camera frame to the network input (kernels/common/preprocess_image.h).
+  void (*preprocess)(const PreprocessPlan& plan, const ImageView& img, float* out);
 };
 
 // Dense convolution weights [Co][KH][KW][Ci] -> [KH][KW][Ci][Co].

@@ -57,12 +57,14 @@ void run(const PreprocessPlan& plan, const ImageView& img, float* out) {
 }  // namespace
 
 bool plan_preprocess(const PreprocessParams& p, PixelFormat format, int width, int height,
-                     PreprocessPlan* plan) {
+                     PreprocessPlan* plan,
+                     void (*fast)(const PreprocessPlan&, const ImageView&, float*)) {
   if (p.size < 1 || p.size > PreprocessPlan::kMaxSize || width < 1 || height < 1) return false;
   if (p.channels != 1 && p.channels != 3) return false;
   for (int c = 0; c < p.channels; ++c) {
     if (!(p.std[c] > 0.0f)) return false;
   }
+  if (fast) plan->fast = fast;
   plan->params = p;
   plan->width = width;
   plan->height = height;
@@ -86,6 +88,11 @@ bool plan_preprocess(const PreprocessParams& p, PixelFormat format, int width, i
 }
 
 void preprocess_image(const PreprocessPlan& plan, const ImageView& img, float* out) {
+  if (plan.fast) return plan.fast(plan, img, out);
+  preprocess_image_portable(plan, img, out);
+}
+
+void preprocess_image_portable(const PreprocessPlan& plan, const ImageView& img, float* out) {
   switch (plan.format) {
     case PixelFormat::kRgb24: return run<PixelFormat::kRgb24>(plan, img, out);
     case PixelFormat::kBgr24: return run<PixelFormat::kBgr24>(plan, img, out);

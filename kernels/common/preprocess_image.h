@@ -2,7 +2,8 @@
 // weights for every output row and column are computed once when the camera
 // geometry is known (plan), so a frame costs four neighbour fetches, a
 // colour conversion and a normalisation per output pixel -- no allocation,
-// no division. Results equal preprocess_image__ref (same arithmetic order).
+// no division. The portable loop equals preprocess_image__ref (same arithmetic
+// order); the ISA kernels (simd/preprocess_impl.inl) are within a few ulp.
 #pragma once
 
 #include "kernels/common/image_types.h"
@@ -16,11 +17,20 @@ struct PreprocessPlan {
   PixelFormat format = PixelFormat::kRgb24;
   int x0[kMaxSize], x1[kMaxSize], y0[kMaxSize], y1[kMaxSize];  // absolute pixel indices
   float wx[kMaxSize], wy[kMaxSize];
+  // The ISA's kernel (KernelSet::preprocess), chosen when planning; null: the
+  // portable table-driven loop below.
+  void (*fast)(const PreprocessPlan& plan, const ImageView& img, float* out) = nullptr;
 };
 
 // false if the geometry is unusable (size > kMaxSize, empty frame, ...).
+// `fast`: the ISA kernel to use (the engine's KernelSet::preprocess), or null.
+// Re-planning (a camera renegotiated) keeps the plan's kernel when `fast` is null.
 bool plan_preprocess(const PreprocessParams& p, PixelFormat format, int width, int height,
-                     PreprocessPlan* plan);
+                     PreprocessPlan* plan,
+                     void (*fast)(const PreprocessPlan&, const ImageView&, float*) = nullptr);
+
+// The portable loop, whatever the plan's kernel (tests, benchmarks).
+void preprocess_image_portable(const PreprocessPlan& plan, const ImageView& img, float* out);
 
 // @rt: out = the network input (NHWC float). img must match the plan's geometry.
 void preprocess_image(const PreprocessPlan& plan, const ImageView& img, float* out);

@@ -66,6 +66,14 @@ static inline float vreduce_add(V v) {
 static inline float vreduce_max(V v) {
   return _mm512_reduce_max_ps(v);
 }
+static inline V vfloor(V v) {
+  return _mm512_roundscale_ps(v, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+}
+// kLanes bytes (unsigned) as floats.
+static inline V vload_u8(const uint8_t* p) {
+  return _mm512_cvtepi32_ps(
+      _mm512_cvtepu8_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p))));
+}
 static inline V vround(V v) {
   return _mm512_roundscale_ps(v, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
 }

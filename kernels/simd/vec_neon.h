@@ -72,6 +72,15 @@ static inline float vreduce_add(V v) {
 static inline float vreduce_max(V v) {
   return vmaxvq_f32(v);
 }
+static inline V vfloor(V v) {
+  return vrndmq_f32(v);
+}
+// kLanes bytes (unsigned) as floats.
+static inline V vload_u8(const uint8_t* p) {
+  const uint8x8_t b = vcreate_u8(uint64_t(p[0]) | uint64_t(p[1]) << 8 | uint64_t(p[2]) << 16 |
+                                 uint64_t(p[3]) << 24);
+  return vcvtq_f32_u32(vmovl_u16(vget_low_u16(vmovl_u8(b))));
+}
 static inline V vround(V v) {
   return vrndnq_f32(v);
 }

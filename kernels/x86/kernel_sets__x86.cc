@@ -39,6 +39,8 @@ void f32_attention_pack_kv__avx2(int, int, int, const float*, size_t, const floa
 bool f32_attention_4x2v__avx2(int, int, int, const float*, size_t, const float*, const float*, int,
                               float, float*, size_t, int, int, float*);
 size_t f32_attention_scratch__avx2(int);
+void u8_f32_preprocess__avx512(const PreprocessPlan&, const ImageView&, float*);
+void u8_f32_preprocess__avx2(const PreprocessPlan&, const ImageView&, float*);
 
 namespace {
 
@@ -62,6 +64,7 @@ const KernelSet kAvx512 = {
     f32_attention_pack_kv__avx512,
     f32_attention_8x2v__avx512,
     f32_attention_scratch__avx512,
+    u8_f32_preprocess__avx512,
 };
 
 const KernelSet kAvx2 = {
@@ -84,6 +87,7 @@ const KernelSet kAvx2 = {
     f32_attention_pack_kv__avx2,
     f32_attention_4x2v__avx2,
     f32_attention_scratch__avx2,
+    u8_f32_preprocess__avx2,
 };
 
 }  // namespace

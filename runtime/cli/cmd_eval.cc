@@ -80,8 +80,8 @@ int cmd_eval(int argc, char** argv) {
   const ModelMeta& m = e.meta();
   const kernels::PreprocessParams pp = preprocess_params(m);
   auto plan = std::make_unique<kernels::PreprocessPlan>();
-  if (!kernels::plan_preprocess(pp, kernels::PixelFormat::kRgb24, r.width(), r.height(),
-                                plan.get())) {
+  if (!kernels::plan_preprocess(pp, kernels::PixelFormat::kRgb24, r.width(), r.height(), plan.get(),
+                                e.kernel_set() ? e.kernel_set()->preprocess : nullptr)) {
     std::fprintf(stderr, "aprt eval: cannot map %dx%d frames to the %dx%d input\n", r.width(),
                  r.height(), pp.size, pp.size);
     return 2;

@@ -105,7 +105,8 @@ int cmd_infer(int argc, char** argv) {
   const ModelMeta& m = e.meta();
   const kernels::PreprocessParams pp = preprocess_params(m);
   auto plan = std::make_unique<kernels::PreprocessPlan>();
-  if (!kernels::plan_preprocess(pp, format, width, height, plan.get())) {
+  if (!kernels::plan_preprocess(pp, format, width, height, plan.get(),
+                                e.kernel_set() ? e.kernel_set()->preprocess : nullptr)) {
     std::fprintf(stderr, "aprt infer: cannot map %dx%d frames to the model's input\n", width,
                  height);
     return 2;

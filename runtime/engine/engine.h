@@ -93,6 +93,9 @@ class Engine {
   const ModelFile& model() const { return model_; }
   const MemoryReport& memory() const { return memory_; }
   const char* isa() const;  // the kernels chosen at load ("avx512", "ref", ...)
+  // Those kernels (null: the reference kernels), e.g. for the frame
+  // preprocessing that feeds this engine.
+  const kernels::KernelSet* kernel_set() const { return ks_; }
   int threads() const { return pool_ ? pool_->threads() : 1; }
   size_t op_count() const { return nodes_.size(); }
   const OpNode& op(size_t i) const { return nodes_[i]; }

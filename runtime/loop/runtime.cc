@@ -149,7 +149,9 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
       static_cast<ReplaySource*>(ch->source.get())->pace_with(ch->slot.get());
     }
     ch->plan.reset(new (std::nothrow) kernels::PreprocessPlan());
-    if (!ch->plan || !kernels::plan_preprocess(pp, format, width, height, ch->plan.get())) {
+    const kernels::KernelSet* ks = r->engine_->kernel_set();
+    if (!ch->plan || !kernels::plan_preprocess(pp, format, width, height, ch->plan.get(),
+                                               ks ? ks->preprocess : nullptr)) {
       return Error(Errc::kInvalidArgument,
                    "run: camera %s: cannot map %dx%d frames to the model's %dx%d input",
                    cam.name.c_str(), width, height, pp.size, pp.size);

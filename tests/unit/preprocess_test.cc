@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "drivers/replay/image_decoder.h"
+#include "kernels/common/cpu_features.h"
+#include "kernels/common/kernel_set.h"
 #include "kernels/common/preprocess_image.h"
 #include "kernels/ref/preprocess_image__ref.h"
 #include "runtime/common/allocation_counter.h"
@@ -60,6 +62,22 @@ TEST(Preprocess, MatchesTheTrainingTransformForEveryFormat) {
     for (size_t i = 0; i < want.size(); ++i) {
       ASSERT_NEAR(got[i], want[i], 2e-5) << name << " at " << i;
       ASSERT_EQ(got[i], ref[i]) << name << " at " << i;  // same arithmetic, bit for bit
+    }
+    // The ISA kernels this CPU runs, against the same Python transform.
+    const kernels::CpuFeatures& cpu = kernels::cpu_features();
+    const kernels::KernelSet* sets[] = {cpu.avx512 ? kernels::kernel_set_avx512() : nullptr,
+                                        cpu.avx2_fma ? kernels::kernel_set_avx2() : nullptr,
+                                        cpu.neon ? kernels::kernel_set_neon() : nullptr};
+    for (const kernels::KernelSet* ks : sets) {
+      if (!ks) continue;
+      auto fast = std::make_unique<kernels::PreprocessPlan>();
+      ASSERT_TRUE(kernels::plan_preprocess(imagenet(size), f, w, h, fast.get(), ks->preprocess));
+      const AllocationScope fast_allocs;
+      kernels::preprocess_image(*fast, img, got.data());
+      EXPECT_EQ(fast_allocs.count(), 0u);
+      for (size_t i = 0; i < want.size(); ++i) {
+        ASSERT_NEAR(got[i], want[i], 2e-5) << name << " (" << ks->isa << ") at " << i;
+      }
     }
     ++checked;
   }
