@@ -39,6 +39,15 @@ std::string resolve(const std::string& path, const std::string& base) {
 // restarting the service. The configuration has been read and checked; the
 // model is loaded for real (checksums, op set, memory plan) with the
 // configured engine options.
+std::string source_text(const Config::Source& s) {
+  if (s.type == "replay") return s.replay.path;
+  if (s.type == "libcamera") {
+    return "libcamera camera " +
+           (s.libcamera.camera.empty() ? std::string("0") : s.libcamera.camera);
+  }
+  return s.v4l2.device;
+}
+
 int check_only(const std::string& path, const Config& cfg) {
   std::string note;
   auto engine = load_model(cfg, &note);
@@ -160,13 +169,11 @@ int cmd_run(int argc, char** argv) {
   sigaction(SIGHUP, &hup, nullptr);
   const Engine& e = (*runtime)->engine();
   std::printf("aprt run: %s (%s kernels, %d thread%s) on %s\n", cfg.model.c_str(), e.isa(),
-              e.threads(), e.threads() > 1 ? "s" : "",
-              cfg.source.type == "replay" ? cfg.source.replay.path.c_str()
-                                          : cfg.source.v4l2.device.c_str());
+              e.threads(), e.threads() > 1 ? "s" : "", source_text(cfg.source).c_str());
   for (size_t i = 1; i < cfg.cameras.size(); ++i) {
     const Config::Source& src = cfg.cameras[i].source;
     std::printf("aprt run: fused with camera %s on %s\n", cfg.cameras[i].name.c_str(),
-                src.type == "replay" ? src.replay.path.c_str() : src.v4l2.device.c_str());
+                source_text(src).c_str());
   }
   if (save) {
     char* colon = nullptr;

@@ -202,7 +202,7 @@ Status read_source(Reader& r, const Node* src, const std::string& path, Config::
   const auto join = [&](const std::string& p, const char* k) { return Reader::join(p, k); };
 #define TRY(expr) \
   if (!(s = (expr))) return s
-  TRY(r.map(src, path, {"type", "replay", "v4l2"}));
+  TRY(r.map(src, path, {"type", "replay", "v4l2", "libcamera"}));
   TRY(r.str(src, path, "type", &src_out->type, {"replay", "v4l2", "libcamera"}));
   const Node* rp = src ? src->get("replay") : nullptr;
   TRY(r.map(rp, join(path, "replay"), {"path", "rate_hz", "loop", "frames"}));
@@ -223,6 +223,17 @@ Status read_source(Reader& r, const Node* src, const std::string& path, Config::
             {"YUYV", "UYVY", "NV12", "RGB24", "BGR24", "MJPEG"}));
   TRY(r.integer(v, join(path, "v4l2"), "fps", 1, 1000, &src_out->v4l2.fps));
   TRY(r.integer(v, join(path, "v4l2"), "buffers", 2, 32, &src_out->v4l2.buffers));
+  const Node* lc = src ? src->get("libcamera") : nullptr;
+  const std::string lp = join(path, "libcamera");
+  TRY(r.map(lc, lp, {"camera", "width", "height", "format", "role", "fps", "buffers"}));
+  TRY(r.integer(lc, lp, "fps", 1, 1000, &src_out->libcamera.fps));
+  TRY(r.str(lc, lp, "camera", &src_out->libcamera.camera));
+  TRY(r.integer(lc, lp, "width", 16, 8192, &src_out->libcamera.width));
+  TRY(r.integer(lc, lp, "height", 16, 8192, &src_out->libcamera.height));
+  TRY(r.str(lc, lp, "format", &src_out->libcamera.format,
+            {"YUYV", "UYVY", "NV12", "RGB24", "BGR24", "MJPEG"}));
+  TRY(r.str(lc, lp, "role", &src_out->libcamera.role, {"viewfinder", "video", "still"}));
+  TRY(r.integer(lc, lp, "buffers", 2, 32, &src_out->libcamera.buffers));
 
 #undef TRY
   return ok();

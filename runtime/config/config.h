@@ -53,6 +53,14 @@ struct Config {
       int fps = 30;
       int buffers = 4;
     } v4l2;
+    struct Libcamera {
+      std::string camera;  // id or index; empty: the first camera
+      int width = 640, height = 480;
+      std::string format = "YUYV";
+      std::string role = "viewfinder";  // viewfinder | video | still
+      int fps = 30;
+      int buffers = 4;
+    } libcamera;
   } source;
 
   // Several cameras, fused into one pose (runtime/pose/pose_fusion.h). Empty:

@@ -18,6 +18,7 @@
 #include <cstring>
 #include <limits>
 
+#include "drivers/camera/libcamera_source.h"
 #include "drivers/camera/v4l2_source.h"
 #include "drivers/replay/replay_source.h"
 #include "runtime/engine/model_input.h"
@@ -138,8 +139,27 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
       height = src.v4l2.height;
       format = dev.value()->format();
       ch->source = std::move(dev.value());
+    } else if (src.type == "libcamera") {
+      LibcameraOptions lo;
+      lo.camera = src.libcamera.camera;
+      lo.width = src.libcamera.width;
+      lo.height = src.libcamera.height;
+      lo.format = src.libcamera.format;
+      lo.role = src.libcamera.role;
+      lo.buffers = src.libcamera.buffers;
+      lo.fps = src.libcamera.fps;
+      auto dev = LibcameraSource::create(lo);
+      if (!dev) {
+        if (cams.size() == 1) return dev.error();
+        return Error(Errc::kInvalidArgument, "run: camera %s: %s", cam.name.c_str(),
+                     dev.error().message());
+      }
+      width = src.libcamera.width;
+      height = src.libcamera.height;
+      format = dev.value()->format();
+      ch->source = std::move(dev.value());
     } else {
-      return Error(Errc::kUnsupported, "run: source type '%s' is not available in this build yet",
+      return Error(Errc::kUnsupported, "run: source type '%s' is not available in this build",
                    src.type.c_str());
     }
     auto slot = FrameSlot::create(ch->source->max_frame_bytes());
@@ -823,11 +843,17 @@ Status Runtime::write_timing_report(const char* json_path) const {
   TimingContext ctx;
   ctx.model = config_.model.c_str();
   const bool replay = config_.source.type == "replay";
-  ctx.source = replay ? config_.source.replay.path.c_str() : config_.source.v4l2.device.c_str();
+  const Config::Source& src = config_.source;
+  ctx.source =
+      replay ? src.replay.path.c_str()
+      : src.type == "libcamera"
+          ? (src.libcamera.camera.empty() ? "libcamera camera 0" : src.libcamera.camera.c_str())
+          : src.v4l2.device.c_str();
   ctx.isa = engine_->isa();
   ctx.threads = engine_->threads();
-  const double hz = replay ? (config_.source.replay.recorded ? 0 : config_.source.replay.rate_hz)
-                           : double(config_.source.v4l2.fps);
+  const double hz = replay                    ? (src.replay.recorded ? 0 : src.replay.rate_hz)
+                    : src.type == "libcamera" ? double(src.libcamera.fps)
+                                              : double(src.v4l2.fps);
   ctx.camera_period_ms = hz > 0 ? 1000.0 / hz : 0;
   ctx.inference_deadline_ms = config_.supervisor.inference_deadline_ms;
   ctx.allocations_counted = allocation_count_ != nullptr;

@@ -187,6 +187,26 @@ fusion: {max_position_spread_m: 3, min_agreeing: 2, max_frame_skew_ms: 15}
                  "fusion.min_agreeing: expected an integer in [1, 8]");
 }
 
+TEST(Config, Libcamera) {
+  auto c = parse_config(
+      "model: m\nsource:\n  type: libcamera\n  libcamera: {camera: \"0\", width: 1280, height: "
+      "720, "
+      "format: NV12, role: video, fps: 20, buffers: 6}\n",
+      "test.yaml");
+  ASSERT_TRUE(c) << c.error().message();
+  EXPECT_EQ(c->source.type, "libcamera");
+  EXPECT_EQ(c->source.libcamera.camera, "0");
+  EXPECT_EQ(c->source.libcamera.width, 1280);
+  EXPECT_EQ(c->source.libcamera.format, "NV12");
+  EXPECT_EQ(c->source.libcamera.role, "video");
+  EXPECT_EQ(c->source.libcamera.fps, 20);
+  EXPECT_EQ(c->source.libcamera.buffers, 6);
+  expect_refused("model: m\nsource: {type: libcamera, libcamera: {role: raw}}\n",
+                 "source.libcamera.role: 'raw' is not one of: viewfinder, video, still");
+  expect_refused("model: m\nsource: {type: libcamera, libcamera: {device: /dev/video0}}\n",
+                 "source.libcamera.device: unknown key");
+}
+
 TEST(Config, ShippedConfigurationsParse) {
   for (const char* name : {"config/default.yaml", "config/aprt.yaml"}) {
     auto c = load_config(std::string(APRT_SOURCE_DIR) + "/" + name);
