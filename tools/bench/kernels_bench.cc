@@ -20,6 +20,7 @@
 #include "kernels/common/cpu_features.h"
 #include "kernels/common/kernel_set.h"
 #include "kernels/common/preprocess_image.h"
+#include "kernels/common/qkernel_set.h"
 #include "kernels/ref/preprocess_image__ref.h"
 #include "tools/bench/fma_peak.h"
 
@@ -28,6 +29,7 @@ namespace {
 using namespace aprt::kernels;
 
 const KernelSet* g_ks = nullptr;
+const QKernelSet* g_qs = nullptr;  // int8: the table matching --isa
 double g_peak_gflops = 0.0;
 
 // 64-byte aligned like the engine's arena and packed weights.
@@ -92,6 +94,52 @@ void BM_Gemm(benchmark::State& state) {
   add_peak_counter(state, 2.0 * m * n * k);
 }
 
+// The same LINEAR shapes in int8 (u8 activations x s8 weights, int32
+// accumulation, fp32 epilogue; kernels/common/qkernel_set.h), the best int8
+// table this CPU runs. Counter GOP/s (2 M N K per call) and, beside BM_Gemm's
+// GFLOP/s on the same shape, the int8 speed-up.
+void BM_QGemm(benchmark::State& state) {
+  const QKernelSet* qs = g_qs;
+  if (!qs) {
+    state.SkipWithError("no int8 kernels for this CPU");
+    return;
+  }
+  const int m = int(state.range(0)), n = int(state.range(1)), k = int(state.range(2));
+  std::mt19937 rng(3);
+  std::vector<uint8_t> a(size_t(m) * k);
+  for (uint8_t& v : a) v = uint8_t(rng());
+  std::vector<int8_t> w(size_t(n) * k), packed(qs8_pack_w_bytes(n, k, qs->nr, qs->kgroup));
+  for (int8_t& v : w) v = int8_t(int(rng() % 255) - 127);
+  qs8_pack_w(n, k, qs->nr, qs->kgroup, w.data(), packed.data());
+  std::vector<int32_t> colsum(n);
+  qs8_column_sums(n, k, w.data(), colsum.data());
+  const auto mult = rnd(n), bias = rnd(n);
+  Buf c(size_t(m) * n);
+  const QGemmArgs g{m,
+                    n,
+                    k,
+                    a.data(),
+                    size_t(k),
+                    17,
+                    packed.data(),
+                    colsum.data(),
+                    mult.data(),
+                    bias.data(),
+                    nullptr,
+                    0,
+                    c.data(),
+                    size_t(n),
+                    Act::kNone};
+  const int panels = (n + qs->nr - 1) / qs->nr;
+  for (auto _ : state) {
+    qs->gemm(g, 0, m, 0, panels);
+    benchmark::DoNotOptimize(c.data());
+  }
+  state.counters["GOP/s"] =
+      benchmark::Counter(2.0 * m * n * k / 1e9, benchmark::Counter::kIsIterationInvariantRate);
+  state.SetLabel(qs->isa);
+}
+
 // Fused attention: Lq = Lk = L, heads x d, one thread.
 void BM_Attention(benchmark::State& state) {
   const int l = int(state.range(0)), heads = int(state.range(1)), d = int(state.range(2));
@@ -149,6 +197,17 @@ void set_flush_denormals() {
 // the backbone's largest pointwise convolutions.
 BENCHMARK(BM_FmaPeak)->Iterations(1);
 BENCHMARK(BM_Gemm)
+    ->Args({784, 256, 256})
+    ->Args({784, 512, 256})
+    ->Args({196, 256, 256})
+    ->Args({256, 256, 256})
+    ->Args({64, 256, 256})
+    ->Args({12544, 96, 16})
+    ->Args({3136, 144, 24})
+    ->Args({784, 240, 40})
+    ->Args({196, 480, 80})
+    ->Args({1, 1024, 256});
+BENCHMARK(BM_QGemm)
     ->Args({784, 256, 256})
     ->Args({784, 512, 256})
     ->Args({196, 256, 256})
@@ -237,6 +296,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "kernels_bench: no fast kernels for '%s' on this CPU\n", isa.c_str());
     return 2;
   }
+  g_qs = std::string(g_ks->isa) == "avx2" ? qkernel_set_avx2() : qkernel_set_best();
   g_peak_gflops = aprt::bench::fma_peak_gflops(400'000'000);
   std::printf("FMA peak of one core, measured now: %.1f GFLOP/s (%s kernels)\n", g_peak_gflops,
               g_ks->isa);

@@ -1,0 +1,109 @@
+// int8 GEMM, 4 rows x 16 columns per tile, NEON without the dot product
+// (every armv8-a core): weights widened to int16, smlal by the activation
+// (0..255 fits int16), and the activation quantiser shared with neondot.
+// Scheme and epilogue: kernels/common/qkernel_set.h.
+#include <arm_neon.h>
+
+#include "kernels/common/qkernel_set.h"
+
+namespace aprt::kernels {
+namespace {
+
+constexpr int kMr = 4, kNr = 16, kG = 1;
+
+template <int R>
+void tile(const QGemmArgs& g, int r0, int j0, int ncols, const int8_t* wp) {
+  int32x4_t acc[R][4];
+  for (int r = 0; r < R; ++r)
+    for (int q = 0; q < 4; ++q) acc[r][q] = vdupq_n_s32(0);
+  const uint8_t* a[R];
+  for (int r = 0; r < R; ++r) a[r] = g.a + size_t(r0 + r) * g.lda;
+  for (int p = 0; p < g.k; ++p) {
+    const int8x16_t w = vld1q_s8(wp + size_t(p) * kNr);
+    const int16x8_t lo = vmovl_s8(vget_low_s8(w)), hi = vmovl_s8(vget_high_s8(w));
+#pragma GCC unroll 4
+    for (int r = 0; r < R; ++r) {
+      const int16_t av = int16_t(a[r][p]);
+      acc[r][0] = vmlal_n_s16(acc[r][0], vget_low_s16(lo), av);
+      acc[r][1] = vmlal_n_s16(acc[r][1], vget_high_s16(lo), av);
+      acc[r][2] = vmlal_n_s16(acc[r][2], vget_low_s16(hi), av);
+      acc[r][3] = vmlal_n_s16(acc[r][3], vget_high_s16(hi), av);
+    }
+  }
+  for (int q = 0; q < 4; ++q) {
+    const int cols = ncols - 4 * q;
+    if (cols <= 0) break;
+    const int j = j0 + 4 * q;
+    int32_t cs[4] = {};
+    float mu[4] = {}, bi[4] = {};
+    for (int t = 0; t < cols && t < 4; ++t) {
+      cs[t] = g.w_colsum[j + t];
+      mu[t] = g.mult[j + t];
+      bi[t] = g.bias ? g.bias[j + t] : 0.0f;
+    }
+    const int32x4_t corr = vmulq_n_s32(vld1q_s32(cs), g.a_zero);
+    const float32x4_t mult = vld1q_f32(mu), bias = vld1q_f32(bi);
+    for (int r = 0; r < R; ++r) {
+      const float32x4_t y = vfmaq_f32(bias, vcvtq_f32_s32(vsubq_s32(acc[r][q], corr)), mult);
+      float out[4];
+      vst1q_f32(out, y);
+      const float* res = g.residual ? g.residual + size_t(r0 + r) * g.ldr + j : nullptr;
+      float* c = g.c + size_t(r0 + r) * g.ldc + j;
+      for (int t = 0; t < cols && t < 4; ++t) {
+        float v = out[t];
+        if (res) v += res[t];
+        if (g.act == Act::kRelu) v = v > 0.0f ? v : 0.0f;
+        c[t] = v;
+      }
+    }
+  }
+}
+
+void gemm(const QGemmArgs& g, int r0, int r1, int p0, int p1) {
+  for (int p = p0; p < p1; ++p) {
+    const int j0 = p * kNr, ncols = g.n - j0 < kNr ? g.n - j0 : kNr;
+    const int8_t* wp = g.w_packed + size_t(p) * g.k * kNr;
+    int r = r0;
+    for (; r + kMr <= r1; r += kMr) tile<kMr>(g, r, j0, ncols, wp);
+    switch (r1 - r) {
+      case 3: tile<3>(g, r, j0, ncols, wp); break;
+      case 2: tile<2>(g, r, j0, ncols, wp); break;
+      case 1: tile<1>(g, r, j0, ncols, wp); break;
+      default: break;
+    }
+  }
+}
+
+}  // namespace
+
+void u8_quantize__neon(size_t n, const float* x, float inv_scale, int32_t zero, uint8_t* q) {
+  const float32x4_t s = vdupq_n_f32(inv_scale), lo = vdupq_n_f32(-512.0f), hi = vdupq_n_f32(512.0f);
+  const int32x4_t z = vdupq_n_s32(zero);
+  size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    int32x4_t v[2];
+    for (int h = 0; h < 2; ++h) {
+      // maxnm: a NaN becomes lo (then 0), as in the reference.
+      const float32x4_t t = vminq_f32(vmaxnmq_f32(vmulq_f32(vld1q_f32(x + i + 4 * h), s), lo), hi);
+      v[h] = vaddq_s32(vcvtnq_s32_f32(t), z);  // round half to even
+    }
+    const uint16x8_t w16 = vcombine_u16(vqmovun_s32(v[0]), vqmovun_s32(v[1]));
+    vst1_u8(q + i, vqmovn_u16(w16));
+  }
+  for (; i < n; ++i) {
+    float t[8] = {x[i]};
+    uint8_t b[8];
+    u8_quantize__neon(8, t, inv_scale, zero, b);
+    q[i] = b[0];
+  }
+}
+
+namespace {
+const QKernelSet kSet = {"neon", kMr, kNr, kG, gemm, u8_quantize__neon};
+}  // namespace
+
+const QKernelSet* qkernel_set_neon() {
+  return &kSet;
+}
+
+}  // namespace aprt::kernels

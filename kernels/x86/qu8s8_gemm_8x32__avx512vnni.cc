@@ -1,0 +1,118 @@
+// int8 GEMM, 8 rows x 32 columns per tile, AVX-512 VNNI (vpdpbusd: unsigned
+// activations x signed weights, four products per 32-bit lane), and the
+// activation quantiser. Scheme and epilogue: kernels/common/qkernel_set.h.
+#include <immintrin.h>
+
+#include <cstring>
+
+#include "kernels/common/qkernel_set.h"
+
+namespace aprt::kernels {
+namespace {
+
+constexpr int kMr = 8, kNr = 32, kG = 4;
+
+inline int32_t load_a4(const uint8_t* p) {
+  int32_t v;
+  std::memcpy(&v, p, 4);  // fixed size: one load
+  return v;
+}
+inline int32_t load_a_tail(const uint8_t* p, int n) {  // n (1..3) valid bytes, zero-padded
+  uint32_t v = 0;
+  for (int i = 0; i < n; ++i) v |= uint32_t(p[i]) << (8 * i);
+  return int32_t(v);
+}
+
+template <int R>
+void tile(const QGemmArgs& g, int r0, int j0, int ncols, const int8_t* wp) {
+  __m512i acc[R][2];
+  for (int r = 0; r < R; ++r) acc[r][0] = acc[r][1] = _mm512_setzero_si512();
+  const uint8_t* a[R];
+  for (int r = 0; r < R; ++r) a[r] = g.a + size_t(r0 + r) * g.lda;
+  const int full = g.k / kG;
+  for (int gi = 0; gi < full; ++gi) {
+    const __m512i b0 = _mm512_loadu_si512(wp + size_t(gi) * kNr * kG);
+    const __m512i b1 = _mm512_loadu_si512(wp + size_t(gi) * kNr * kG + 64);
+#pragma GCC unroll 8
+    for (int r = 0; r < R; ++r) {
+      const __m512i av = _mm512_set1_epi32(load_a4(a[r] + gi * kG));
+      acc[r][0] = _mm512_dpbusd_epi32(acc[r][0], av, b0);
+      acc[r][1] = _mm512_dpbusd_epi32(acc[r][1], av, b1);
+    }
+  }
+  if (const int left = g.k - full * kG) {  // a partial last group: never read past a row
+    const __m512i b0 = _mm512_loadu_si512(wp + size_t(full) * kNr * kG);
+    const __m512i b1 = _mm512_loadu_si512(wp + size_t(full) * kNr * kG + 64);
+    for (int r = 0; r < R; ++r) {
+      const __m512i av = _mm512_set1_epi32(load_a_tail(a[r] + full * kG, left));
+      acc[r][0] = _mm512_dpbusd_epi32(acc[r][0], av, b0);
+      acc[r][1] = _mm512_dpbusd_epi32(acc[r][1], av, b1);
+    }
+  }
+  const __m512i za = _mm512_set1_epi32(g.a_zero);
+  for (int h = 0; h < 2; ++h) {
+    const int cols = ncols - 16 * h;
+    if (cols <= 0) break;
+    const __mmask16 m = cols >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << cols) - 1);
+    const int j = j0 + 16 * h;
+    const __m512i cs = _mm512_maskz_loadu_epi32(m, g.w_colsum + j);
+    const __m512 mult = _mm512_maskz_loadu_ps(m, g.mult + j);
+    const __m512 bias = g.bias ? _mm512_maskz_loadu_ps(m, g.bias + j) : _mm512_setzero_ps();
+    const __m512i corr = _mm512_mullo_epi32(za, cs);
+    for (int r = 0; r < R; ++r) {
+      const __m512i exact = _mm512_sub_epi32(acc[r][h], corr);
+      __m512 y = _mm512_fmadd_ps(_mm512_cvtepi32_ps(exact), mult, bias);
+      if (g.residual) {
+        y = _mm512_add_ps(y, _mm512_maskz_loadu_ps(m, g.residual + size_t(r0 + r) * g.ldr + j));
+      }
+      if (g.act == Act::kRelu) y = _mm512_max_ps(y, _mm512_setzero_ps());
+      _mm512_mask_storeu_ps(g.c + size_t(r0 + r) * g.ldc + j, m, y);
+    }
+  }
+}
+
+void gemm(const QGemmArgs& g, int r0, int r1, int p0, int p1) {
+  const int groups = (g.k + kG - 1) / kG;
+  for (int p = p0; p < p1; ++p) {
+    const int j0 = p * kNr, ncols = g.n - j0 < kNr ? g.n - j0 : kNr;
+    const int8_t* wp = g.w_packed + size_t(p) * groups * kNr * kG;
+    int r = r0;
+    for (; r + kMr <= r1; r += kMr) tile<kMr>(g, r, j0, ncols, wp);
+    switch (r1 - r) {
+      case 7: tile<7>(g, r, j0, ncols, wp); break;
+      case 6: tile<6>(g, r, j0, ncols, wp); break;
+      case 5: tile<5>(g, r, j0, ncols, wp); break;
+      case 4: tile<4>(g, r, j0, ncols, wp); break;
+      case 3: tile<3>(g, r, j0, ncols, wp); break;
+      case 2: tile<2>(g, r, j0, ncols, wp); break;
+      case 1: tile<1>(g, r, j0, ncols, wp); break;
+      default: break;
+    }
+  }
+}
+
+void quantize(size_t n, const float* x, float inv_scale, int32_t zero, uint8_t* q) {
+  const __m512 s = _mm512_set1_ps(inv_scale), lo = _mm512_set1_ps(-512.0f),
+               hi = _mm512_set1_ps(512.0f);
+  const __m512i z = _mm512_set1_epi32(zero), qmax = _mm512_set1_epi32(255);
+  for (size_t i = 0; i < n; i += 16) {
+    const size_t left = n - i;
+    const __mmask16 m = left >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << left) - 1);
+    // max(t, lo) first: a NaN becomes lo, then 0 after the clamp, as in the reference.
+    __m512 t =
+        _mm512_min_ps(_mm512_max_ps(_mm512_mul_ps(_mm512_maskz_loadu_ps(m, x + i), s), lo), hi);
+    __m512i v = _mm512_add_epi32(_mm512_cvtps_epi32(t), z);  // round half to even
+    v = _mm512_min_epi32(_mm512_max_epi32(v, _mm512_setzero_si512()), qmax);
+    _mm_mask_storeu_epi8(q + i, m, _mm512_cvtepi32_epi8(v));
+  }
+}
+
+const QKernelSet kSet = {"avx512vnni", kMr, kNr, kG, gemm, quantize};
+
+}  // namespace
+
+const QKernelSet* qkernel_set_avx512vnni() {
+  return &kSet;
+}
+
+}  // namespace aprt::kernels
