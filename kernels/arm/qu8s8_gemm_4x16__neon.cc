@@ -4,7 +4,9 @@
 // Scheme and epilogue: kernels/common/qkernel_set.h.
 #include <arm_neon.h>
 
+#include "kernels/arm/qu8s8_epilogue__neon.h"
 #include "kernels/common/qkernel_set.h"
+#include "kernels/common/row_tiles.h"
 
 namespace aprt::kernels {
 namespace {
@@ -30,47 +32,15 @@ void tile(const QGemmArgs& g, int r0, int j0, int ncols, const int8_t* wp) {
       acc[r][3] = vmlal_n_s16(acc[r][3], vget_high_s16(hi), av);
     }
   }
-  for (int q = 0; q < 4; ++q) {
-    const int cols = ncols - 4 * q;
-    if (cols <= 0) break;
-    const int j = j0 + 4 * q;
-    int32_t cs[4] = {};
-    float mu[4] = {}, bi[4] = {};
-    for (int t = 0; t < cols && t < 4; ++t) {
-      cs[t] = g.w_colsum[j + t];
-      mu[t] = g.mult[j + t];
-      bi[t] = g.bias ? g.bias[j + t] : 0.0f;
-    }
-    const int32x4_t corr = vmulq_n_s32(vld1q_s32(cs), g.a_zero);
-    const float32x4_t mult = vld1q_f32(mu), bias = vld1q_f32(bi);
-    for (int r = 0; r < R; ++r) {
-      const float32x4_t y = vfmaq_f32(bias, vcvtq_f32_s32(vsubq_s32(acc[r][q], corr)), mult);
-      float out[4];
-      vst1q_f32(out, y);
-      const float* res = g.residual ? g.residual + size_t(r0 + r) * g.ldr + j : nullptr;
-      float* c = g.c + size_t(r0 + r) * g.ldc + j;
-      for (int t = 0; t < cols && t < 4; ++t) {
-        float v = out[t];
-        if (res) v += res[t];
-        if (g.act == Act::kRelu) v = v > 0.0f ? v : 0.0f;
-        c[t] = v;
-      }
-    }
-  }
+  qgemm_store_neon<R>(g, r0, j0, ncols, acc, g.a_zero);
 }
 
 void gemm(const QGemmArgs& g, int r0, int r1, int p0, int p1) {
+  const size_t panel = size_t(g.k) * kNr * kG;  // bytes per packed panel
   for (int p = p0; p < p1; ++p) {
     const int j0 = p * kNr, ncols = g.n - j0 < kNr ? g.n - j0 : kNr;
-    const int8_t* wp = g.w_packed + size_t(p) * g.k * kNr;
-    int r = r0;
-    for (; r + kMr <= r1; r += kMr) tile<kMr>(g, r, j0, ncols, wp);
-    switch (r1 - r) {
-      case 3: tile<3>(g, r, j0, ncols, wp); break;
-      case 2: tile<2>(g, r, j0, ncols, wp); break;
-      case 1: tile<1>(g, r, j0, ncols, wp); break;
-      default: break;
-    }
+    const int8_t* wp = g.w_packed + size_t(p) * panel;
+    for_row_tiles<kMr>(r0, r1, [&](auto rows, int r) { tile<rows()>(g, r, j0, ncols, wp); });
   }
 }
 

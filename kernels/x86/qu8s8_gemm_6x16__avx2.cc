@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "kernels/common/qkernel_set.h"
+#include "kernels/common/row_tiles.h"
 
 namespace aprt::kernels {
 namespace {
@@ -64,20 +65,11 @@ void tile(const QGemmArgs& g, int r0, int j0, int ncols, const int8_t* wp) {
 }
 
 void gemm(const QGemmArgs& g, int r0, int r1, int p0, int p1) {
-  const int groups = (g.k + kG - 1) / kG;
+  const size_t panel = size_t((g.k + kG - 1) / kG) * kNr * kG;  // bytes per packed panel
   for (int p = p0; p < p1; ++p) {
     const int j0 = p * kNr, ncols = g.n - j0 < kNr ? g.n - j0 : kNr;
-    const int8_t* wp = g.w_packed + size_t(p) * groups * kNr * kG;
-    int r = r0;
-    for (; r + kMr <= r1; r += kMr) tile<kMr>(g, r, j0, ncols, wp);
-    switch (r1 - r) {
-      case 5: tile<5>(g, r, j0, ncols, wp); break;
-      case 4: tile<4>(g, r, j0, ncols, wp); break;
-      case 3: tile<3>(g, r, j0, ncols, wp); break;
-      case 2: tile<2>(g, r, j0, ncols, wp); break;
-      case 1: tile<1>(g, r, j0, ncols, wp); break;
-      default: break;
-    }
+    const int8_t* wp = g.w_packed + size_t(p) * panel;
+    for_row_tiles<kMr>(r0, r1, [&](auto rows, int r) { tile<rows()>(g, r, j0, ncols, wp); });
   }
 }
 

@@ -18,11 +18,10 @@
 #include <cstring>
 #include <limits>
 
-#include "drivers/camera/libcamera_source.h"
-#include "drivers/camera/v4l2_source.h"
 #include "drivers/replay/replay_source.h"
 #include "runtime/engine/model_input.h"
 #include "runtime/loop/model_loader.h"
+#include "runtime/loop/open_source.h"
 
 namespace aprt {
 namespace {
@@ -105,63 +104,17 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
     ch->source_type = cam.source.type;
     ch->base_from_sensor =
         RigidTransform::from_xyz_rpy(cam.sensor_xyz, cam.sensor_rpy_deg).isometry();
-    int width = 0, height = 0;
-    kernels::PixelFormat format = kernels::PixelFormat::kRgb24;
     const Config::Source& src = cam.source;
-    if (src.type == "replay") {
-      ReplayPacing pacing{src.replay.rate_hz, src.replay.recorded, src.replay.loop,
-                          uint64_t(src.replay.frames)};
-      auto replay = ReplaySource::open(src.replay.path.c_str(), pacing);
-      if (!replay) {
-        if (cams.size() == 1) return replay.error();
-        return Error(Errc::kInvalidArgument, "run: camera %s: %s", cam.name.c_str(),
-                     replay.error().message());
-      }
-      width = replay.value()->replay().width();
-      height = replay.value()->replay().height();
-      if (i == 0) frames = replay.value()->replay().size();
-      ch->source = std::move(replay.value());
-    } else if (src.type == "v4l2") {
-      V4l2Options vo;
-      vo.device = src.v4l2.device;
-      vo.width = src.v4l2.width;
-      vo.height = src.v4l2.height;
-      vo.format = src.v4l2.format;
-      vo.fps = src.v4l2.fps;
-      vo.buffers = src.v4l2.buffers;
-      auto dev = V4l2Source::create(vo);
-      if (!dev) {
-        if (cams.size() == 1) return dev.error();
-        return Error(Errc::kInvalidArgument, "run: camera %s: %s", cam.name.c_str(),
-                     dev.error().message());
-      }
-      width = src.v4l2.width;
-      height = src.v4l2.height;
-      format = dev.value()->format();
-      ch->source = std::move(dev.value());
-    } else if (src.type == "libcamera") {
-      LibcameraOptions lo;
-      lo.camera = src.libcamera.camera;
-      lo.width = src.libcamera.width;
-      lo.height = src.libcamera.height;
-      lo.format = src.libcamera.format;
-      lo.role = src.libcamera.role;
-      lo.buffers = src.libcamera.buffers;
-      lo.fps = src.libcamera.fps;
-      auto dev = LibcameraSource::create(lo);
-      if (!dev) {
-        if (cams.size() == 1) return dev.error();
-        return Error(Errc::kInvalidArgument, "run: camera %s: %s", cam.name.c_str(),
-                     dev.error().message());
-      }
-      width = src.libcamera.width;
-      height = src.libcamera.height;
-      format = dev.value()->format();
-      ch->source = std::move(dev.value());
-    } else {
-      return Error(Errc::kUnsupported, "run: source type '%s' is not available in this build",
-                   src.type.c_str());
+    auto opened = open_source(src);
+    if (!opened) {
+      if (cams.size() == 1) return opened.error();
+      return Error(opened.error().code(), "run: camera %s: %s", cam.name.c_str(),
+                   opened.error().message());
     }
+    const int width = opened->width, height = opened->height;
+    const kernels::PixelFormat format = opened->format;
+    if (i == 0) frames = opened->frames;
+    ch->source = std::move(opened->source);
     auto slot = FrameSlot::create(ch->source->max_frame_bytes());
     if (!slot) return slot.error();
     ch->slot = std::move(slot.value());

@@ -196,28 +196,22 @@ void set_flush_denormals() {
 // The transformer's shapes at 224 (784 / 196 tokens) and 128 (256 / 64), and
 // the backbone's largest pointwise convolutions.
 BENCHMARK(BM_FmaPeak)->Iterations(1);
-BENCHMARK(BM_Gemm)
-    ->Args({784, 256, 256})
-    ->Args({784, 512, 256})
-    ->Args({196, 256, 256})
-    ->Args({256, 256, 256})
-    ->Args({64, 256, 256})
-    ->Args({12544, 96, 16})
-    ->Args({3136, 144, 24})
-    ->Args({784, 240, 40})
-    ->Args({196, 480, 80})
-    ->Args({1, 1024, 256});
-BENCHMARK(BM_QGemm)
-    ->Args({784, 256, 256})
-    ->Args({784, 512, 256})
-    ->Args({196, 256, 256})
-    ->Args({256, 256, 256})
-    ->Args({64, 256, 256})
-    ->Args({12544, 96, 16})
-    ->Args({3136, 144, 24})
-    ->Args({784, 240, 40})
-    ->Args({196, 480, 80})
-    ->Args({1, 1024, 256});
+void gemm_shapes(benchmark::internal::Benchmark* b) {
+  for (const auto& mnk : std::vector<std::vector<int64_t>>{{784, 256, 256},
+                                                           {784, 512, 256},
+                                                           {196, 256, 256},
+                                                           {256, 256, 256},
+                                                           {64, 256, 256},
+                                                           {12544, 96, 16},
+                                                           {3136, 144, 24},
+                                                           {784, 240, 40},
+                                                           {196, 480, 80},
+                                                           {1, 1024, 256}}) {
+    b->Args(mnk);
+  }
+}
+BENCHMARK(BM_Gemm)->Apply(gemm_shapes);
+BENCHMARK(BM_QGemm)->Apply(gemm_shapes);
 BENCHMARK(BM_Attention)
     ->Args({784, 8, 32})
     ->Args({256, 8, 32})

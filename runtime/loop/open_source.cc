@@ -1,0 +1,56 @@
+#include "runtime/loop/open_source.h"
+
+#include "drivers/camera/libcamera_source.h"
+#include "drivers/camera/v4l2_source.h"
+#include "drivers/replay/replay_source.h"
+
+namespace aprt {
+
+Expected<OpenedSource> open_source(const Config::Source& src) {
+  OpenedSource o;
+  if (src.type == "replay") {
+    ReplayPacing pacing{src.replay.rate_hz, src.replay.recorded, src.replay.loop,
+                        uint64_t(src.replay.frames)};
+    auto replay = ReplaySource::open(src.replay.path.c_str(), pacing);
+    if (!replay) return replay.error();
+    o.width = replay.value()->replay().width();
+    o.height = replay.value()->replay().height();
+    o.frames = replay.value()->replay().size();
+    o.source = std::move(replay.value());
+  } else if (src.type == "v4l2") {
+    V4l2Options vo;
+    vo.device = src.v4l2.device;
+    vo.width = src.v4l2.width;
+    vo.height = src.v4l2.height;
+    vo.format = src.v4l2.format;
+    vo.fps = src.v4l2.fps;
+    vo.buffers = src.v4l2.buffers;
+    auto dev = V4l2Source::create(vo);
+    if (!dev) return dev.error();
+    o.width = vo.width;
+    o.height = vo.height;
+    o.format = dev.value()->format();
+    o.source = std::move(dev.value());
+  } else if (src.type == "libcamera") {
+    LibcameraOptions lo;
+    lo.camera = src.libcamera.camera;
+    lo.width = src.libcamera.width;
+    lo.height = src.libcamera.height;
+    lo.format = src.libcamera.format;
+    lo.role = src.libcamera.role;
+    lo.buffers = src.libcamera.buffers;
+    lo.fps = src.libcamera.fps;
+    auto dev = LibcameraSource::create(lo);
+    if (!dev) return dev.error();
+    o.width = lo.width;
+    o.height = lo.height;
+    o.format = dev.value()->format();
+    o.source = std::move(dev.value());
+  } else {
+    return Error(Errc::kUnsupported, "run: source type '%s' is not available in this build",
+                 src.type.c_str());
+  }
+  return o;
+}
+
+}  // namespace aprt

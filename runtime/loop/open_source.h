@@ -1,0 +1,22 @@
+// A configured camera source (replay, V4L2, libcamera) created with the frame
+// geometry the preprocessing plan needs. Start-up only.
+#pragma once
+
+#include <memory>
+
+#include "drivers/frame/frame_source.h"
+#include "kernels/common/image_types.h"
+#include "runtime/config/config.h"
+
+namespace aprt {
+
+struct OpenedSource {
+  std::unique_ptr<FrameSource> source;
+  int width = 0, height = 0;  // what the source is configured to deliver
+  kernels::PixelFormat format = kernels::PixelFormat::kRgb24;
+  size_t frames = 0;  // a replay's length (0 for a device)
+};
+
+Expected<OpenedSource> open_source(const Config::Source& src);
+
+}  // namespace aprt
