@@ -12,6 +12,7 @@
 #include <cstring>
 #include <new>
 
+#include "drivers/camera/v4l2_devices.h"
 #include "drivers/replay/image_decoder.h"
 
 namespace aprt {
@@ -116,7 +117,10 @@ void V4l2Source::fill_info(FrameBuffer* dst, const v4l2_buffer& b, size_t bytes)
 }
 
 Status V4l2Source::open_device() {
-  const char* dev = o_.device.c_str();
+  // By path, or looked up by card name / bus_info on every (re)open: a camera
+  // that comes back may have another node number.
+  char dev[256];
+  if (Status s = resolve_v4l2_device(o_.device.c_str(), dev, sizeof dev); !s) return s;
   fd_ = open(dev, O_RDWR | O_NONBLOCK | O_CLOEXEC);
   if (fd_ < 0) {
     const int e = errno;

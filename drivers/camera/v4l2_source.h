@@ -19,6 +19,7 @@ struct v4l2_buffer;
 namespace aprt {
 
 struct V4l2Options {
+  // A path, or a card name / bus_info (drivers/camera/v4l2_devices.h).
   std::string device = "/dev/video0";
   int width = 640, height = 480;
   std::string format = "YUYV";  // YUYV UYVY NV12 RGB24 BGR24 MJPEG (decoded to RGB24)

@@ -14,6 +14,7 @@ int cmd_candump(int argc, char** argv);
 int cmd_sign(int argc, char** argv);
 int cmd_ddsdump(int argc, char** argv);
 int cmd_infer(int argc, char** argv);
+int cmd_cameras(int argc, char** argv);
 
 // Where the shipped model, demo drive, DBC and default configuration live:
 // $APRT_DATA_DIR, else the build's source tree (or the install prefix).

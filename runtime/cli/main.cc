@@ -24,6 +24,7 @@ void usage(FILE* out) {
                "  candump        decode aprt's pose frames from CAN (the receiver's view)\n"
                "  ddsdump        receive aprt's poses and status over DDS (the ROS 2 side's view)\n"
                "  sign           Ed25519 keys and model signatures (model_signing)\n"
+               "  cameras        the V4L2 and libcamera cameras this machine offers\n"
                "\n"
                "Run 'aprt <command> --help' for the command's options.\n");
 }
@@ -73,6 +74,7 @@ int main(int argc, char** argv) {
   if (!std::strcmp(cmd, "sign")) return aprt::cli::cmd_sign(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "ddsdump")) return aprt::cli::cmd_ddsdump(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "infer")) return aprt::cli::cmd_infer(argc - 1, argv + 1);
+  if (!std::strcmp(cmd, "cameras")) return aprt::cli::cmd_cameras(argc - 1, argv + 1);
   std::fprintf(stderr, "aprt: unknown command '%s'\n", cmd);
   usage(stderr);
   return 2;

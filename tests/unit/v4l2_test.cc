@@ -11,6 +11,7 @@
 // jpeglib.h needs FILE and size_t declared first.
 #include <jpeglib.h>
 
+#include "drivers/camera/v4l2_devices.h"
 #include "drivers/camera/v4l2_source.h"
 #include "drivers/replay/image_decoder.h"
 
@@ -32,6 +33,28 @@ TEST(V4l2, RefusesWhatItCannotDeliver) {
   auto b = V4l2Source::create(o);
   ASSERT_FALSE(b);
   EXPECT_NE(std::strstr(b.error().message(), "buffers"), nullptr);
+}
+
+TEST(V4l2, ByCardNameOrBusInfo) {
+  char path[256];
+  // A path is used as it is.
+  ASSERT_TRUE(resolve_v4l2_device("/dev/v4l/by-id/usb-cam-video-index0", path, sizeof path));
+  EXPECT_STREQ(path, "/dev/v4l/by-id/usb-cam-video-index0");
+  // A name no capture node has: refused, with what there is (the HIL VM's
+  // camera_vivid scenario opens vivid by its card name).
+  Status s = resolve_v4l2_device("aprt test camera that is not there", path, sizeof path);
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().code(), Errc::kNotFound);
+  EXPECT_NE(std::strstr(s.error().message(), "'aprt test camera that is not there'"), nullptr);
+  EXPECT_NE(std::strstr(s.error().message(), "found: "), nullptr) << s.error().message();
+  // And the source reports it from start(), retrying like a missing path.
+  V4l2Options o;
+  o.device = "aprt test camera that is not there";
+  auto src = V4l2Source::create(o);
+  ASSERT_TRUE(src) << src.error().message();
+  Status st = src.value()->start();
+  ASSERT_FALSE(st);
+  EXPECT_NE(std::strstr(st.error().message(), "card name or bus_info"), nullptr);
 }
 
 TEST(V4l2, MissingDeviceIsAClearErrorAndRetriedWithBackoff) {
