@@ -61,8 +61,8 @@ Status resolve_v4l2_device(const char* name, char* path, size_t path_size) {
       return ok();
     }
     char one[112];
-    std::snprintf(one, sizeof one, "%s%.23s '%.31s' %.31s", seen[0] ? ", " : "", devs[i].path, devs[i].card,
-                  devs[i].bus_info);
+    std::snprintf(one, sizeof one, "%s%.23s '%.31s' %.31s", seen[0] ? ", " : "", devs[i].path,
+                  devs[i].card, devs[i].bus_info);
     std::strncat(seen, one, sizeof seen - std::strlen(seen) - 1);
   }
   return Error(Errc::kNotFound,
