@@ -189,7 +189,10 @@ int cmd_candump(int argc, char** argv) {
         "  --timeout S     stop after S seconds without a frame (interface; default: never)\n"
         "  --raw           print every frame's signals too\n"
         "  --quiet         the summary only\n"
-        "  --strict        exit 1 if any CRC, counter or grouping error was seen\n",
+        "  --strict        exit 1 if any CRC, counter or grouping error was seen\n"
+        "  --tolerate-loss with --strict: lost frames (a skipped counter, an incomplete\n"
+        "                  estimate) are what E2E detects on a bus outage, not a fault;\n"
+        "                  only CRC errors, repeated counters and DBC disagreements fail\n",
         data_dir().c_str());
     return 0;
   }
@@ -199,7 +202,8 @@ int cmd_candump(int argc, char** argv) {
   const char* config_path = args.value("--config");
   const long count = args.integer("--count", 0, 0, 1L << 40);
   const long timeout_s = args.integer("--timeout", 0, 0, 1L << 20);
-  const bool raw = args.flag("--raw"), quiet = args.flag("--quiet"), strict = args.flag("--strict");
+  const bool raw = args.flag("--raw"), quiet = args.flag("--quiet"), strict = args.flag("--strict"),
+             tolerate_loss = args.flag("--tolerate-loss");
   if (args.error() || args.leftover() || (!interface == !log)) {
     std::fprintf(stderr, "aprt candump: %s (see --help)\n",
                  args.error()      ? "an option needs a valid value"
@@ -310,8 +314,9 @@ int cmd_candump(int argc, char** argv) {
     }
   }
   std::fflush(stdout);
-  const bool bad = decoder.crc_errors || decoder.repeated || decoder.skipped ||
-                   decoder.incomplete || printer.disagreements;
+  const bool lost = decoder.skipped || decoder.incomplete;
+  const bool bad =
+      decoder.crc_errors || decoder.repeated || printer.disagreements || (lost && !tolerate_loss);
   std::printf("summary: %" PRIu64 " frames, %" PRIu64 " estimates; CRC errors %" PRIu64
               ", repeated counter %" PRIu64 ", skipped counter %" PRIu64
               ", incomplete estimates %" PRIu64 ", error frames %" PRIu64 ", other ids %" PRIu64

@@ -6,7 +6,9 @@
 run=$!
 sleep 1
 ip link add dev vcan0 type vcan && ip link set vcan0 up
-/aprt/bin/aprt candump --interface vcan0 --timeout 3 --strict > /tmp/dump.txt 2>&1 &
+# Frames queued in the kernel when the link goes down are lost: the receiver
+# sees a counter gap (what E2E is for), never a CRC error or a repeat.
+/aprt/bin/aprt candump --interface vcan0 --timeout 3 --strict --tolerate-loss > /tmp/dump.txt 2>&1 &
 dump=$!
 sleep 2
 ip link set vcan0 down
@@ -15,7 +17,7 @@ ip link set vcan0 up
 wait $run
 check "aprt run ends cleanly" [ $? -eq 0 ]
 wait $dump
-check "candump --strict: no CRC or counter error across the outage" [ $? -eq 0 ]
+check "candump --strict --tolerate-loss: no CRC error or repeated counter across the outage" [ $? -eq 0 ]
 sed 's/^/# run: /' /tmp/run.txt; grep -v "^ *[0-9.]*  ctr" /tmp/dump.txt | sed 's/^/# dump: /'
 grep -q "interface 'vcan0' not found" /tmp/run.txt; check "missing interface at start reported" [ $? -eq 0 ]
 reopened=$(sed -n 's/.*reopened \([0-9]*\).*/\1/p' /tmp/run.txt)
