@@ -19,8 +19,10 @@
 
 #include "kernels/common/cpu_features.h"
 #include "kernels/common/kernel_set.h"
+#include "kernels/common/lidar_fast.h"
 #include "kernels/common/preprocess_image.h"
 #include "kernels/common/qkernel_set.h"
+#include "kernels/ref/lidar__ref.h"
 #include "kernels/ref/preprocess_image__ref.h"
 #include "tools/bench/fma_peak.h"
 
@@ -272,6 +274,53 @@ BENCHMARK(BM_Preprocess)
                    {64, 224},
                    {0, 1, 2}})
     ->Unit(benchmark::kMicrosecond);
+
+// LiDAR preprocessing (issue #5): farthest-point sampling of Arg(1) of
+// Arg(0) points, and the BEV histogram of Arg(0) points on 256 x 256 cells;
+// Arg(2): 0 reference, 1 fast. Random points in a 80 m square.
+std::vector<LidarPoint> bench_scan(size_t n) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> xy(-40.0f, 40.0f), z(-3.0f, 8.0f);
+  std::vector<LidarPoint> p(n);
+  for (LidarPoint& q : p) q = {xy(rng), xy(rng), z(rng), 0.0f};
+  return p;
+}
+void BM_LidarFps(benchmark::State& state) {
+  const size_t n = size_t(state.range(0)), count = size_t(state.range(1));
+  const auto p = bench_scan(n);
+  std::vector<uint32_t> idx(count);
+  std::vector<float> scratch(4 * n);
+  for (auto _ : state) {
+    if (state.range(2) == 0) {
+      lidar_fps__ref(p.data(), n, count, idx.data(), scratch.data());
+    } else {
+      lidar_fps(p.data(), n, count, idx.data(), scratch.data());
+    }
+    benchmark::DoNotOptimize(idx.data());
+  }
+  state.SetLabel(state.range(2) == 0 ? "reference" : "fast");
+}
+BENCHMARK(BM_LidarFps)
+    ->Args({20000, 1024, 0})
+    ->Args({20000, 1024, 1})
+    ->Unit(benchmark::kMillisecond);
+void BM_LidarBev(benchmark::State& state) {
+  const size_t n = size_t(state.range(0));
+  const auto p = bench_scan(n);
+  const BevParams b{256, 0.125f, -16.0f, -16.0f, 0.2f, 5.0f};
+  std::vector<float> out(256 * 256 * 2);
+  std::vector<uint16_t> counts(out.size());
+  for (auto _ : state) {
+    if (state.range(1) == 0) {
+      lidar_bev_histogram__ref(p.data(), n, b, out.data());
+    } else {
+      lidar_bev_histogram(p.data(), n, b, counts.data(), out.data());
+    }
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.SetLabel(state.range(1) == 0 ? "reference" : "fast");
+}
+BENCHMARK(BM_LidarBev)->Args({120000, 0})->Args({120000, 1})->Unit(benchmark::kMicrosecond);
 
 int main(int argc, char** argv) {
   set_flush_denormals();  // as Engine::run() does

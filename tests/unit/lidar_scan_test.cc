@@ -1,0 +1,139 @@
+// LiDAR scans from files (drivers/lidar): KITTI .bin and PCD (ascii and
+// binary, fields in any order, other fields beside them), through the point
+// gate -- NaN/Inf dropped, absurd values clipped, the count bounded -- and
+// files that lie about themselves refused with the reason.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "drivers/lidar/scan_reader.h"
+
+namespace aprt {
+namespace {
+
+std::string temp(const char* name) {
+  return ::testing::TempDir() + name;
+}
+
+void write_bytes(const std::string& path, const void* p, size_t n) {
+  std::ofstream(path, std::ios::binary).write(static_cast<const char*>(p), long(n));
+}
+
+struct Fixture {
+  std::unique_ptr<ScanReader> reader = std::move(ScanReader::create().value());
+  std::unique_ptr<PointCloud> cloud = std::move(PointCloud::create(4).value());
+  PointRegion region;
+};
+
+TEST(LidarScan, KittiBinThroughTheGate) {
+  Fixture f;
+  const float pts[] = {1,    2,        3,  0.5f,  // kept
+                       NAN,  0,        0,  1,     // dropped: NaN
+                       0,    INFINITY, 0,  1,     // dropped: Inf
+                       1e9f, -5,       0,  1,     // clipped to x_max
+                       4,    5,        6,  NAN,   // kept, intensity 0
+                       7,    8,        9,  1,    10, 11,
+                       12,   1,        13, 14,   15, 1};  // the last over capacity
+  const std::string path = temp("scan.bin");
+  write_bytes(path, pts, sizeof pts);
+  ASSERT_TRUE(f.reader->read(path.c_str(), f.region, f.cloud.get()));
+  const ScanStats& s = f.cloud->stats();
+  EXPECT_EQ(s.read, 8u);
+  EXPECT_EQ(s.non_finite, 2u);
+  EXPECT_EQ(s.clipped, 1u);
+  EXPECT_EQ(s.over_capacity, 2u);
+  ASSERT_EQ(f.cloud->size(), 4u);
+  EXPECT_EQ(f.cloud->points()[1].x, f.region.x_max);
+  EXPECT_EQ(f.cloud->points()[2].intensity, 0.0f);
+  // Not a whole number of points: refused.
+  write_bytes(path, pts, sizeof pts - 3);
+  Status t = f.reader->read(path.c_str(), f.region, f.cloud.get());
+  ASSERT_FALSE(t);
+  EXPECT_NE(std::strstr(t.error().message(), "truncated?"), nullptr) << t.error().message();
+}
+
+TEST(LidarScan, PcdAsciiAndBinary) {
+  Fixture f;
+  f.cloud = std::move(PointCloud::create(100).value());
+  const std::string a = temp("scan_ascii.pcd");
+  std::ofstream(a) << "# .PCD v0.7\nVERSION 0.7\nFIELDS intensity x ring y z\nSIZE 4 4 2 4 4\n"
+                      "TYPE F F U F F\nCOUNT 1 1 1 1 1\nWIDTH 3\nHEIGHT 1\nPOINTS 3\nDATA ascii\n"
+                      "0.5 1 7 2 3\n0.25 4 8 5 nan\n1 7 9 8 9\n";
+  ASSERT_TRUE(f.reader->read(a.c_str(), f.region, f.cloud.get()));
+  ASSERT_EQ(f.cloud->size(), 2u);
+  EXPECT_EQ(f.cloud->stats().non_finite, 1u);
+  EXPECT_EQ(f.cloud->points()[0].x, 1.0f);
+  EXPECT_EQ(f.cloud->points()[0].y, 2.0f);
+  EXPECT_EQ(f.cloud->points()[0].z, 3.0f);
+  EXPECT_EQ(f.cloud->points()[0].intensity, 0.5f);
+  EXPECT_EQ(f.cloud->points()[1].x, 7.0f);
+
+  // Binary: x as double, an extra field, no intensity; many points across reads.
+  const std::string b = temp("scan_binary.pcd");
+  const int n = 20000;
+  std::string header =
+      "VERSION 0.7\nFIELDS x y z t\nSIZE 8 4 4 4\nTYPE F F F U\nCOUNT 1 1 1 1\n"
+      "WIDTH " +
+      std::to_string(n) + "\nHEIGHT 1\nPOINTS " + std::to_string(n) + "\nDATA binary\n";
+  std::vector<char> body(size_t(n) * 20);
+  for (int i = 0; i < n; ++i) {
+    const double x = i * 0.001;
+    const float y = float(-i) * 0.001f, z = 1.5f;
+    const uint32_t t = uint32_t(i);
+    std::memcpy(&body[size_t(i) * 20], &x, 8);
+    std::memcpy(&body[size_t(i) * 20 + 8], &y, 4);
+    std::memcpy(&body[size_t(i) * 20 + 12], &z, 4);
+    std::memcpy(&body[size_t(i) * 20 + 16], &t, 4);
+  }
+  {
+    std::ofstream o(b, std::ios::binary);
+    o << header;
+    o.write(body.data(), long(body.size()));
+  }
+  auto big = std::move(PointCloud::create(size_t(n)).value());
+  ASSERT_TRUE(f.reader->read(b.c_str(), f.region, big.get()));
+  ASSERT_EQ(big->size(), size_t(n));
+  EXPECT_FLOAT_EQ(big->points()[n - 1].x, float((n - 1) * 0.001));
+  EXPECT_FLOAT_EQ(big->points()[n - 1].y, float(-(n - 1)) * 0.001f);
+  EXPECT_EQ(big->points()[n - 1].intensity, 0.0f);
+  // Truncated: the header's count is checked.
+  {
+    std::ofstream o(b, std::ios::binary);
+    o << header;
+    o.write(body.data(), long(body.size() / 2));
+  }
+  Status t = f.reader->read(b.c_str(), f.region, big.get());
+  ASSERT_FALSE(t);
+  EXPECT_NE(std::strstr(t.error().message(), "truncated?"), nullptr) << t.error().message();
+}
+
+TEST(LidarScan, PcdThatCannotBeRead) {
+  Fixture f;
+  const std::string p = temp("bad.pcd");
+  std::ofstream(p) << "FIELDS x y\nSIZE 4 4\nTYPE F F\nPOINTS 1\nDATA ascii\n1 2\n";
+  Status s = f.reader->read(p.c_str(), f.region, f.cloud.get());
+  ASSERT_FALSE(s);
+  EXPECT_NE(std::strstr(s.error().message(), "x, y and z"), nullptr) << s.error().message();
+  std::ofstream(p) << "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS 1\nDATA binary_compressed\n";
+  s = f.reader->read(p.c_str(), f.region, f.cloud.get());
+  ASSERT_FALSE(s);
+  EXPECT_NE(std::strstr(s.error().message(), "binary_compressed"), nullptr);
+  std::ofstream(p) << "FIELDS x y z\nSIZE 4 4\nTYPE F F F\nPOINTS 1\nDATA ascii\n1 2 3\n";
+  s = f.reader->read(p.c_str(), f.region, f.cloud.get());
+  ASSERT_FALSE(s);
+  EXPECT_NE(std::strstr(s.error().message(), "inconsistent"), nullptr);
+  const std::string other = temp("scan.las");
+  std::ofstream(other) << "x";
+  s = f.reader->read(other.c_str(), f.region, f.cloud.get());
+  ASSERT_FALSE(s);
+  EXPECT_NE(std::strstr(s.error().message(), "neither .bin"), nullptr);
+  EXPECT_FALSE(f.reader->read("/nonexistent/scan.bin", f.region, f.cloud.get()));
+}
+
+}  // namespace
+}  // namespace aprt
