@@ -26,4 +26,14 @@ inline void for_row_tiles(int r0, int r1, F&& tile) {
   row_tile_rest<MR - 1>(r1 - r, r, tile);
 }
 
+// Column panels [p0, p1) of nr columns (the last one may be narrower), each
+// over rows [r0, r1) in tiles: tile(R, r, j0, ncols, panel_index).
+template <int MR, int NR, class F>
+inline void for_panel_tiles(int n, int r0, int r1, int p0, int p1, F&& tile) {
+  for (int p = p0; p < p1; ++p) {
+    const int j0 = p * NR, ncols = n - j0 < NR ? n - j0 : NR;
+    for_row_tiles<MR>(r0, r1, [&](auto rows, int r) { tile(rows, r, j0, ncols, p); });
+  }
+}
+
 }  // namespace aprt::kernels

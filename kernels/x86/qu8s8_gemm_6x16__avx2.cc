@@ -66,11 +66,9 @@ void tile(const QGemmArgs& g, int r0, int j0, int ncols, const int8_t* wp) {
 
 void gemm(const QGemmArgs& g, int r0, int r1, int p0, int p1) {
   const size_t panel = size_t((g.k + kG - 1) / kG) * kNr * kG;  // bytes per packed panel
-  for (int p = p0; p < p1; ++p) {
-    const int j0 = p * kNr, ncols = g.n - j0 < kNr ? g.n - j0 : kNr;
-    const int8_t* wp = g.w_packed + size_t(p) * panel;
-    for_row_tiles<kMr>(r0, r1, [&](auto rows, int r) { tile<rows()>(g, r, j0, ncols, wp); });
-  }
+  for_panel_tiles<kMr, kNr>(g.n, r0, r1, p0, p1, [&](auto rows, int r, int j0, int ncols, int p) {
+    tile<rows()>(g, r, j0, ncols, g.w_packed + size_t(p) * panel);
+  });
 }
 
 void quantize(size_t n, const float* x, float inv_scale, int32_t zero, uint8_t* q) {
