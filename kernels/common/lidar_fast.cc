@@ -51,7 +51,11 @@ bool lidar_fps(const LidarPoint* p, size_t n, size_t count, uint32_t* idx, float
     float best = -1.0f;
     // Update and maximum: both vectorise (min and max are exact, so the
     // reduction's order does not matter; -fopenmp-simd, no OpenMP runtime).
+    // (GCC; clang does not vectorise this form and -Werror would make its
+    // note fatal, so it gets the plain loop.)
+#if !defined(__clang__)
 #pragma omp simd reduction(max : best)
+#endif
     for (size_t i = 0; i < n; ++i) {
       const float dx = xs[i] - cx, dy = ys[i] - cy, dz = zs[i] - cz;
       const float d = dx * dx + dy * dy + dz * dz;
