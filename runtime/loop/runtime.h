@@ -118,10 +118,8 @@ class Runtime {
 
  private:
   Runtime() = default;
-  static void* capture_main(void* self);
   static void* inference_main(void* self);
   static void* publish_main(void* self);
-  void capture_loop();
   void inference_loop();
   void publish_loop();
   void print_pose(const PoseRecord& r);
