@@ -1,8 +1,12 @@
-// aprt eval --model MODEL --data DIR [--csv FILE] [--json] [--threads N] [--isa X] [--limit N]
+// aprt eval --model MODEL --data DIR [--compare MODEL2] [--csv FILE] [--json] [--threads N]
+//           [--isa X] [--limit N]
 //
 // Runs the model on every frame of a labelled sequence (DeepLoc layout) and
 // reports position and orientation errors: median, mean, p90, max; per-frame
-// rows with --csv (plot them with `python3 -m aprt_tools plot-eval`).
+// rows with --csv (plot them with `python3 -m aprt_tools plot-eval`). With
+// --compare (e.g. the int8 model beside its fp32 source) the second model runs
+// on the same preprocessed input: its errors side by side, and the per-frame
+// deviation of its pose from the first model's (p50 / p99 / max).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -30,18 +34,39 @@ double quat_angle_deg(const double* a, const double* b) {
 }
 
 struct Stats {
-  double median, mean, p90, max;
+  double median, mean, p90, p99, max;
 };
 
 Stats stats(std::vector<double> v) {
-  if (v.empty()) return {0, 0, 0, 0};
+  if (v.empty()) return {0, 0, 0, 0, 0};
   std::sort(v.begin(), v.end());
   double sum = 0;
   for (double x : v) sum += x;
   auto q = [&](double p) {
     return v[std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5))];
   };
-  return {q(0.5), sum / double(v.size()), q(0.9), v.back()};
+  return {q(0.5), sum / double(v.size()), q(0.9), q(0.99), v.back()};
+}
+
+double distance(const double* a, const double* b) {
+  double d = 0;
+  for (int k = 0; k < 3; ++k) d += (a[k] - b[k]) * (a[k] - b[k]);
+  return std::sqrt(d);
+}
+
+// The second model of --compare: same input, its own errors and its deviation.
+struct Compared {
+  std::unique_ptr<Engine> engine;
+  std::vector<double> pos_err, rot_err, pos_dev, rot_dev;
+  size_t flagged = 0;
+};
+
+bool same_input(const ModelMeta& a, const ModelMeta& b) {
+  bool same = a.resize_policy == b.resize_policy && a.norm_channels == b.norm_channels;
+  for (int d = 0; d < 4; ++d) same = same && a.input_shape[d] == b.input_shape[d];
+  for (int c = 0; c < a.norm_channels && same; ++c)
+    same = a.norm_mean[c] == b.norm_mean[c] && a.norm_std[c] == b.norm_std[c];
+  return same;
 }
 
 }  // namespace
@@ -53,6 +78,8 @@ int cmd_eval(int argc, char** argv) {
         "usage: aprt eval --model MODEL --data DIR [options]\n"
         "  --csv FILE    per-frame predictions, truth and errors\n"
         "  --json        summary as one JSON object\n"
+        "  --compare M2  also run model M2 (e.g. its int8 version) on the same input:\n"
+        "                its errors side by side and its deviation from MODEL\n"
         "  --limit N     only the first N frames\n"
         "  --threads N   --isa NAME   as for aprt bench\n");
     return 0;
@@ -64,6 +91,7 @@ int cmd_eval(int argc, char** argv) {
   const long limit = args.integer("--limit", 0, 0, 100000000);
   const long threads = args.integer("--threads", 1, 1, 16);
   const char* isa = args.value("--isa");
+  const char* compare_path = args.value("--compare");
   if (args.error() || !model_path || !data || args.leftover()) {
     std::fprintf(stderr, "aprt eval: usage: aprt eval --model MODEL --data DIR [--csv FILE]\n");
     return 2;
@@ -71,6 +99,18 @@ int cmd_eval(int argc, char** argv) {
   std::unique_ptr<Engine> engine = load_image_model("eval", model_path, int(threads), isa);
   if (!engine) return 2;
   Engine& e = *engine;
+  Compared cmp;
+  if (compare_path) {
+    cmp.engine = load_image_model("eval", compare_path, int(threads), isa);
+    if (!cmp.engine) return 2;
+    if (!same_input(e.meta(), cmp.engine->meta())) {
+      std::fprintf(stderr,
+                   "aprt eval: %s and %s take different inputs (shape, resize or "
+                   "normalisation): nothing to compare frame by frame\n",
+                   model_path, compare_path);
+      return 2;
+    }
+  }
   auto replay = DeeplocReplay::open(data);
   if (!replay) {
     std::fprintf(stderr, "aprt eval: %s\n", replay.error().message());
@@ -111,6 +151,8 @@ int cmd_eval(int argc, char** argv) {
       continue;
     }
     kernels::preprocess_image(*plan, frame.view(), e.input().f32());
+    // The input's buffer is reused by later activations: copy it before run().
+    if (cmp.engine) std::copy_n(e.input().f32(), e.input().numel, cmp.engine->input().f32());
     (void)e.run();
     const PoseEstimate p = decode_pose(e.output().f32(), m);
     if (!p.valid()) ++flagged;
@@ -122,6 +164,16 @@ int cmd_eval(int argc, char** argv) {
     const double oe = quat_angle_deg(p.orientation, frame.info.truth_orientation);
     pos_err.push_back(pe);
     rot_err.push_back(oe);
+    if (cmp.engine) {
+      Engine& c = *cmp.engine;
+      (void)c.run();
+      const PoseEstimate q = decode_pose(c.output().f32(), c.meta());
+      if (!q.valid()) ++cmp.flagged;
+      cmp.pos_err.push_back(distance(q.position, frame.info.truth_position));
+      cmp.rot_err.push_back(quat_angle_deg(q.orientation, frame.info.truth_orientation));
+      cmp.pos_dev.push_back(distance(q.position, p.position));
+      cmp.rot_dev.push_back(quat_angle_deg(q.orientation, p.orientation));
+    }
     if (csv) {
       const FrameInfo& f = frame.info;
       std::fprintf(
@@ -135,14 +187,27 @@ int cmd_eval(int argc, char** argv) {
   }
   if (csv) std::fclose(csv);
   const Stats ps = stats(pos_err), os = stats(rot_err);
+  const Stats cps = stats(cmp.pos_err), cos = stats(cmp.rot_err);
+  const Stats dps = stats(cmp.pos_dev), dos = stats(cmp.rot_dev);
   if (json) {
     std::printf(
         "{\"model\": \"%s\", \"data\": \"%s\", \"frames\": %zu, \"skipped\": %zu, "
         "\"flagged\": %zu, \"position_m\": {\"median\": %.4f, \"mean\": %.4f, \"p90\": %.4f, "
         "\"max\": %.4f}, \"orientation_deg\": {\"median\": %.4f, \"mean\": %.4f, "
-        "\"p90\": %.4f, \"max\": %.4f}, \"isa\": \"%s\"}\n",
+        "\"p90\": %.4f, \"max\": %.4f}, \"isa\": \"%s\"",
         model_path, data, pos_err.size(), bad_frames, flagged, ps.median, ps.mean, ps.p90, ps.max,
         os.median, os.mean, os.p90, os.max, e.isa());
+    if (cmp.engine) {
+      std::printf(
+          ", \"compare\": {\"model\": \"%s\", \"flagged\": %zu, \"position_m\": {\"median\": "
+          "%.4f, \"mean\": %.4f, \"p90\": %.4f, \"max\": %.4f}, \"orientation_deg\": "
+          "{\"median\": %.4f, \"mean\": %.4f, \"p90\": %.4f, \"max\": %.4f}, "
+          "\"deviation_position_m\": {\"p50\": %.5f, \"p99\": %.5f, \"max\": %.5f}, "
+          "\"deviation_orientation_deg\": {\"p50\": %.5f, \"p99\": %.5f, \"max\": %.5f}}",
+          compare_path, cmp.flagged, cps.median, cps.mean, cps.p90, cps.max, cos.median, cos.mean,
+          cos.p90, cos.max, dps.median, dps.p99, dps.max, dos.median, dos.p99, dos.max);
+    }
+    std::printf("}\n");
   } else {
     std::printf("model        %s (%s kernels)\n", model_path, e.isa());
     std::printf("sequence     %s: %zu frames evaluated, %zu skipped, %zu flagged\n", data,
@@ -151,6 +216,18 @@ int cmd_eval(int argc, char** argv) {
                 ps.mean, ps.p90, ps.max);
     std::printf("orientation  median %.2f deg  mean %.2f deg  p90 %.2f deg  max %.2f deg\n",
                 os.median, os.mean, os.p90, os.max);
+    if (cmp.engine) {
+      std::printf("compare      %s (%s kernels), %zu flagged\n", compare_path, cmp.engine->isa(),
+                  cmp.flagged);
+      std::printf("position     median %.2f m  mean %.2f m  p90 %.2f m  max %.2f m\n", cps.median,
+                  cps.mean, cps.p90, cps.max);
+      std::printf("orientation  median %.2f deg  mean %.2f deg  p90 %.2f deg  max %.2f deg\n",
+                  cos.median, cos.mean, cos.p90, cos.max);
+      std::printf("deviation    position p50 %.4f  p99 %.4f  max %.4f m\n", dps.median, dps.p99,
+                  dps.max);
+      std::printf("             orientation p50 %.4f  p99 %.4f  max %.4f deg\n", dos.median,
+                  dos.p99, dos.max);
+    }
   }
   return bad_frames == n ? 1 : 0;
 }

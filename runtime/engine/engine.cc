@@ -62,6 +62,9 @@ Status Engine::bind(const uint8_t* data, size_t size) {
     t.zero_point = e.zero_point;
     if (t.is_const()) t.data = const_cast<uint8_t*>(model_.weights() + e.data_offset);
   }
+  for (size_t i = 0; i < entries.size(); ++i) {
+    if (entries[i].qscale_tensor >= 0) tensors_[i].qscale = &tensors_[entries[i].qscale_tensor];
+  }
   input_ = &tensors_[model_.input_index()];
   output_ = &tensors_[model_.output_index()];
   const auto& ops = model_.ops();
@@ -154,8 +157,10 @@ Expected<std::unique_ptr<Engine>> Engine::build(const uint8_t* data, size_t size
                 format::modality_name(e->model_.meta().modality),
                 format::modality_name(format::Modality(options.expect_modality)));
   }
+  const kernels::QKernelSet* qks = select_qkernels(e->ks_);
   for (OpNode& n : e->nodes_) {
     n.ks = e->ks_;
+    n.qks = qks;
     n.threads = options.threads;
   }
   if (Status s = e->prepare_ops(); !s) return s.error();

@@ -38,6 +38,21 @@ Expected<const kernels::KernelSet*> select_kernels(const char* isa) {
                isa);
 }
 
+const kernels::QKernelSet* select_qkernels(const kernels::KernelSet* ks) {
+  if (!ks) return nullptr;
+  const kernels::CpuFeatures& cpu = kernels::cpu_features();
+  const auto pick = [](const kernels::QKernelSet* first, bool runs,
+                       const kernels::QKernelSet* second) {
+    return first && runs ? first : second;
+  };
+  if (std::strcmp(ks->isa, "avx512") == 0)
+    return pick(kernels::qkernel_set_avx512vnni(), cpu.avx512_vnni, kernels::qkernel_set_avx2());
+  if (std::strcmp(ks->isa, "avx2") == 0) return kernels::qkernel_set_avx2();
+  if (std::strcmp(ks->isa, "neon") == 0)
+    return pick(kernels::qkernel_set_neondot(), cpu.neon_dot, kernels::qkernel_set_neon());
+  return nullptr;
+}
+
 const char* kernel_set_name(const kernels::KernelSet* ks) {
   return ks ? ks->isa : "ref";
 }

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "kernels/common/kernel_set.h"
+#include "kernels/common/qkernel_set.h"
 #include "runtime/common/expected.h"
 
 namespace aprt {
@@ -12,6 +13,12 @@ namespace aprt {
 // run it (never a SIGILL later). The APRT_ISA environment variable is read by
 // the engine when EngineOptions::isa is not set.
 Expected<const kernels::KernelSet*> select_kernels(const char* isa);
+
+// The int8 kernels that go with the fp32 table `ks`: AVX-512 VNNI with
+// "avx512" on a CPU that has VNNI (else the AVX2 int8 kernels), AVX2 with
+// "avx2", NEON dotprod with "neon" on a CPU with dotprod (else plain NEON);
+// null (the int8 reference) with the reference kernels.
+const kernels::QKernelSet* select_qkernels(const kernels::KernelSet* ks);
 
 // The name of what select_kernels(isa) picks ("ref" for the reference).
 const char* kernel_set_name(const kernels::KernelSet* ks);

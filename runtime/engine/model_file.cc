@@ -378,6 +378,11 @@ class ModelFileParser {
           m.config_json = reinterpret_cast<const char*>(v);
           m.config_json_bytes = len;
           break;
+        case MetaKey::kQuantization:
+          if (!(st = expect(MetaType::kStr, 0, 1u << 16))) return st;
+          m.quantization = reinterpret_cast<const char*>(v);
+          m.quantization_bytes = len;
+          break;
         default: break;  // unknown keys: written by a newer minor version, ignored
       }
       pos += 8 + ((uint64_t(len) + 3) & ~uint64_t(3));
@@ -514,6 +519,7 @@ class ModelFileParser {
         file_.output_ = int(i);
       }
     }
+    if (Status st = quantisation(); !st) return st;
     APRT_ENSURE(file_.input_ >= 0, Errc::kBadGraph, "model_bin: no input tensor");
     APRT_ENSURE(file_.output_ >= 0, Errc::kBadGraph, "model_bin: no output tensor");
     const TensorEntry& in = file_.tensors_[file_.input_];
@@ -531,6 +537,46 @@ class ModelFileParser {
                 "model_bin: output '%s' must be 7 f32 values (x y z qw qx qy qz), has %llu %s",
                 out.name, static_cast<unsigned long long>(out.numel),
                 format::dtype_name(out.dtype));
+    return ok();
+  }
+
+  // Quantised constants (FORMAT.md, "Quantised ops"): an i8/u8 tensor is a
+  // constant with a per-tensor scale or per-channel scales, never both; the
+  // per-channel scales are an f32 constant [dims[0]] of finite positive values.
+  Status quantisation() {
+    const auto& ts = file_.tensors_;
+    for (const TensorEntry& t : ts) {
+      const bool integer = t.dtype == DType::kI8 || t.dtype == DType::kU8;
+      if (!integer) {
+        APRT_ENSURE(t.qscale_tensor < 0, Errc::kBadTensor,
+                    "model_bin: tensor '%s' of type %s has per-channel quantisation scales", t.name,
+                    format::dtype_name(t.dtype));
+        continue;
+      }
+      APRT_ENSURE(t.kind == TensorKind::kConst, Errc::kUnsupported,
+                  "model_bin: tensor '%s' is %s but not a constant (integer activations are not "
+                  "supported; ops quantise their inputs themselves)",
+                  t.name, format::dtype_name(t.dtype));
+      APRT_ENSURE((t.scale > 0.0f) != (t.qscale_tensor >= 0), Errc::kBadTensor,
+                  "model_bin: quantised tensor '%s' needs exactly one of a per-tensor scale or "
+                  "per-channel scales (has %s)",
+                  t.name, t.scale > 0.0f ? "both" : "neither");
+      if (t.qscale_tensor < 0) continue;
+      const TensorEntry& q = ts[size_t(t.qscale_tensor)];
+      APRT_ENSURE(q.dtype == DType::kF32 && q.kind == TensorKind::kConst && q.rank == 1 &&
+                      q.numel == t.dims[0],
+                  Errc::kBadTensor,
+                  "model_bin: per-channel scales '%s' of '%s' must be an f32 constant of %u "
+                  "values (one per output channel)",
+                  q.name, t.name, t.dims[0]);
+      const uint8_t* base = file_.weights_ + q.data_offset;
+      for (uint64_t j = 0; j < q.numel; ++j) {
+        const float v = load<float>(base + 4 * j);
+        APRT_ENSURE(std::isfinite(v) && v > 0.0f, Errc::kBadTensor,
+                    "model_bin: per-channel scale %llu of '%s' is %g (must be finite and > 0)",
+                    static_cast<unsigned long long>(j), t.name, double(v));
+      }
+    }
     return ok();
   }
 

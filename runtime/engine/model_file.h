@@ -37,6 +37,11 @@ struct ModelMeta {
   float val_error_orientation_deg = 0.0f;
   const char* config_json = nullptr;  // points into the file; not NUL-terminated
   size_t config_json_bytes = 0;
+  // How the file was quantised (method, calibration set, per-op policy) as
+  // JSON; null for fp32 files. Informational: the policy itself is the dtype
+  // of each op's weights.
+  const char* quantization = nullptr;
+  size_t quantization_bytes = 0;
 };
 
 struct TensorEntry {

@@ -10,7 +10,7 @@ namespace aprt::format {
 
 inline constexpr char kMagic[8] = {'A', 'P', 'R', 'T', 'M', 'D', 'L', '\0'};
 inline constexpr uint16_t kVersionMajor = 1;
-inline constexpr uint16_t kVersionMinor = 0;
+inline constexpr uint16_t kVersionMinor = 1;  // 1.1: int8 LINEAR (FORMAT.md)
 inline constexpr uint32_t kHeaderBytes = 64;
 inline constexpr uint32_t kSectionEntryBytes = 32;
 inline constexpr uint32_t kTensorEntryBytes = 64;
@@ -81,6 +81,7 @@ enum class MetaKey : uint16_t {
   kDimFeedforward = 35,
   kValError = 40,
   kConfigJson = 41,
+  kQuantization = 42,
 };
 
 enum class Modality : uint32_t { kImage = 1, kLidarBev = 2, kLidarPoints = 3 };

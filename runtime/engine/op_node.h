@@ -11,6 +11,7 @@
 #include <cstdint>
 
 #include "kernels/common/kernel_set.h"
+#include "kernels/common/qkernel_set.h"
 #include "runtime/common/expected.h"
 #include "runtime/engine/model_file.h"
 #include "runtime/engine/tensor.h"
@@ -51,6 +52,7 @@ struct OpNode {
   // Set before prepare(): the chosen ISA's kernels (null: reference kernels)
   // and the thread count the op may split its work for.
   const kernels::KernelSet* ks = nullptr;
+  const kernels::QKernelSet* qks = nullptr;  // the int8 kernels that go with ks (null: reference)
   int threads = 1;
   // Declared by prepare():
   size_t scratch_floats = 0;             // shared by all of the op's tasks

@@ -18,6 +18,7 @@ struct Tensor {
   size_t bytes = 0;
   float scale = 0.0f;
   int32_t zero_point = 0;
+  const Tensor* qscale = nullptr;  // per-channel quantisation scales (f32 constant), or null
   void* data = nullptr;  // bound at load(): weights in the model image, others in the arena
 
   bool is_const() const { return kind == format::TensorKind::kConst; }

@@ -36,19 +36,44 @@ ModelBuilder::ModelBuilder() = default;
 
 int ModelBuilder::constant(const std::string& name, std::vector<int> dims,
                            std::vector<float> data) {
-  tensors_.push_back({name, std::move(dims), format::TensorKind::kConst, std::move(data)});
+  tensors_.push_back(T{name,
+                       std::move(dims),
+                       format::TensorKind::kConst,
+                       std::move(data),
+                       format::DType::kF32,
+                       {},
+                       0.0f,
+                       0,
+                       -1});
   return int(tensors_.size()) - 1;
 }
 int ModelBuilder::activation(const std::string& name, std::vector<int> dims) {
-  tensors_.push_back({name, std::move(dims), format::TensorKind::kActivation, {}});
+  tensors_.push_back(T{name,
+                       std::move(dims),
+                       format::TensorKind::kActivation,
+                       {},
+                       format::DType::kF32,
+                       {},
+                       0.0f,
+                       0,
+                       -1});
   return int(tensors_.size()) - 1;
 }
 int ModelBuilder::input(const std::string& name, std::vector<int> dims) {
-  tensors_.push_back({name, std::move(dims), format::TensorKind::kInput, {}});
+  tensors_.push_back(T{
+      name, std::move(dims), format::TensorKind::kInput, {}, format::DType::kF32, {}, 0.0f, 0, -1});
   return int(tensors_.size()) - 1;
 }
 int ModelBuilder::output(const std::string& name, std::vector<int> dims) {
-  tensors_.push_back({name, std::move(dims), format::TensorKind::kOutput, {}});
+  tensors_.push_back(T{name,
+                       std::move(dims),
+                       format::TensorKind::kOutput,
+                       {},
+                       format::DType::kF32,
+                       {},
+                       0.0f,
+                       0,
+                       -1});
   return int(tensors_.size()) - 1;
 }
 void ModelBuilder::op(OpCode code, const std::string& name, std::vector<int> inputs,
@@ -119,7 +144,7 @@ std::vector<uint8_t> ModelBuilder::build() const {
   put(tens, uint64_t(0));
   for (const T& t : tensors_) {
     put(tens, str(t.name));
-    tens.push_back(uint8_t(format::DType::kF32));
+    tens.push_back(uint8_t(t.dtype));
     tens.push_back(uint8_t(t.dims.size()));
     tens.push_back(uint8_t(t.kind));
     tens.push_back(0);
@@ -128,14 +153,19 @@ std::vector<uint8_t> ModelBuilder::build() const {
     if (t.kind == format::TensorKind::kConst) {
       pad_to(weights, format::kAlign);
       off = weights.size();
-      bytes = t.data.size() * 4;
-      put(weights, t.data.data(), bytes);
+      if (t.dtype == format::DType::kI8) {
+        bytes = t.i8.size();
+        put(weights, t.i8.data(), bytes);
+      } else {
+        bytes = t.data.size() * 4;
+        put(weights, t.data.data(), bytes);
+      }
     }
     put(tens, off);
     put(tens, bytes);
-    put(tens, 0.0f);
-    put(tens, int32_t(0));
-    put(tens, int32_t(-1));
+    put(tens, t.scale);
+    put(tens, t.zero);
+    put(tens, int32_t(t.qscale));
     for (int r = 0; r < 3; ++r) put(tens, uint32_t(0));
   }
   // OPSQ
@@ -282,6 +312,34 @@ void build_small(ModelBuilder& b) {
 
 std::vector<uint8_t> make_small_model() {
   return make_small_model(nullptr);
+}
+
+int ModelBuilder::constant_i8(const std::string& name, std::vector<int> dims,
+                              std::vector<int8_t> data, float scale, int qscale) {
+  T t{name, std::move(dims), format::TensorKind::kConst, {}, format::DType::kI8, {}, 0.0f, 0, -1};
+  t.dtype = format::DType::kI8;
+  t.i8 = std::move(data);
+  t.scale = scale;
+  t.qscale = qscale;
+  tensors_.push_back(std::move(t));
+  return int(tensors_.size()) - 1;
+}
+
+std::vector<uint8_t> make_small_int8_model(void (*edit)(ModelBuilder&)) {
+  ModelBuilder b;
+  build_small(b);
+  const int op = b.op_index("proj");
+  std::vector<float> scales(16);
+  std::vector<int8_t> w(16 * 8);
+  for (int j = 0; j < 16; ++j) scales[j] = 0.004f + 0.0005f * float(j);
+  for (size_t i = 0; i < w.size(); ++i) w[i] = int8_t(int((i * 37 + 11) % 255) - 127);
+  const int qs = b.constant("proj.w.qscale", {16}, scales);
+  const int wq = b.constant_i8("proj.w.int8", {16, 8}, w, 0.0f, qs);
+  b.set_inputs(op, {b.tensor_index("se.out"), wq, b.tensor_index("proj.b")});
+  b.set_param(op, 1, ModelBuilder::f32_bits(0.02f));
+  b.set_param(op, 2, 100);
+  if (edit) edit(b);
+  return b.build();
 }
 
 std::vector<uint8_t> make_small_model(void (*edit)(ModelBuilder&)) {

@@ -17,6 +17,10 @@ class ModelBuilder {
   ModelBuilder();
 
   int constant(const std::string& name, std::vector<int> dims, std::vector<float> data);
+  // An int8 constant (weights [N, K]) with a per-tensor scale (> 0) or, when
+  // `scale` is 0, per-channel scales in the f32 constant `qscale`.
+  int constant_i8(const std::string& name, std::vector<int> dims, std::vector<int8_t> data,
+                  float scale, int qscale = -1);
   int activation(const std::string& name, std::vector<int> dims);
   int input(const std::string& name, std::vector<int> dims);
   int output(const std::string& name, std::vector<int> dims);
@@ -31,6 +35,12 @@ class ModelBuilder {
   void set_param(int op, int k, int32_t v);
   void set_inputs(int op, std::vector<int> inputs) { ops_[op].in = std::move(inputs); }
   void set_kind(int tensor, format::TensorKind kind) { tensors_[tensor].kind = kind; }
+  void set_quant(int tensor, float scale, int32_t zero, int qscale) {
+    tensors_[tensor].scale = scale;
+    tensors_[tensor].zero = zero;
+    tensors_[tensor].qscale = qscale;
+  }
+  void set_data(int tensor, std::vector<float> data) { tensors_[tensor].data = std::move(data); }
 
   // Metadata (sensible defaults; the input shape is taken from the input tensor).
   uint32_t modality = 1;
@@ -47,6 +57,11 @@ class ModelBuilder {
     std::vector<int> dims;
     format::TensorKind kind;
     std::vector<float> data;
+    format::DType dtype = format::DType::kF32;
+    std::vector<int8_t> i8;
+    float scale = 0.0f;
+    int32_t zero = 0;
+    int qscale = -1;
   };
   struct O {
     format::OpCode code;
@@ -62,6 +77,10 @@ class ModelBuilder {
 std::vector<uint8_t> make_small_model();
 // Same with a modification applied to the builder before writing.
 std::vector<uint8_t> make_small_model(void (*edit)(ModelBuilder&));
+// The small model with its pointwise LINEAR "proj" (64 rows, 8 -> 16) in int8:
+// weights "proj.w.int8" with per-channel scales "proj.w.qscale", input scale
+// 0.02, zero point 100.
+std::vector<uint8_t> make_small_int8_model(void (*edit)(ModelBuilder&) = nullptr);
 
 struct SectionInfo {
   uint32_t tag;

@@ -27,6 +27,13 @@ def cmd_golden(a):
         cmd_convert(a)
 
 
+def cmd_golden_int8(a):
+    from .golden import make_golden_int8
+
+    m = make_golden_int8(a.source, a.out)
+    print(f"golden-int8: {a.source} -> {a.out} ({m['ops']} int8 ops, {m['frames']} frames)")
+
+
 def cmd_export(a):
     import torch
 
@@ -70,6 +77,25 @@ def cmd_convert(a):
     with open(a.output, "wb") as f:
         f.write(blob)
     print(f"convert: {a.output}: {report.text()}")
+
+
+def cmd_quantize(a):
+    from .convert.quantize import CalibrationError, quantize_model
+    from .model_bin.reader import ModelBinError
+
+    try:
+        blob, report = quantize_model(open(a.model, "rb").read(), a.calibration, method=a.method,
+                                      percentile=a.percentile, frames=a.frames,
+                                      fp32_ops=a.fp32_ops, backbone=a.backbone)
+    except (CalibrationError, ModelBinError, OSError) as e:
+        print(f"quantize: {a.model}: {e}", file=sys.stderr)
+        sys.exit(2)
+    with open(a.output, "wb") as f:
+        f.write(blob)
+    if a.verbose:
+        for name, rows, k, n, scale, zero in report.ops:
+            print(f"  {name}: {rows}x{k} -> {n}, input scale {scale:.4g} zero {zero}")
+    print(f"quantize: {a.output}: {report.text()}")
 
 
 def cmd_train(a):
@@ -128,6 +154,11 @@ def main(argv=None):
     g.add_argument("--out", required=True)
     g.set_defaults(fn=cmd_golden)
 
+    gi = sub.add_parser("golden-int8", help="quantise a golden model; expected int8 outputs")
+    gi.add_argument("source", help="folder written by golden --convert")
+    gi.add_argument("--out", required=True)
+    gi.set_defaults(fn=cmd_golden_int8)
+
     e = sub.add_parser("export", help="export the reference model (optionally a checkpoint)")
     e.add_argument("--config", default="full", choices=("tiny", "full"))
     e.add_argument("--config-json", help="configuration file written by export/train")
@@ -147,6 +178,21 @@ def main(argv=None):
     c.add_argument("--std", type=_floats, help="per-channel normalisation std")
     c.add_argument("--imagenet", action="store_true", help="ImageNet mean/std (image models)")
     c.set_defaults(fn=cmd_convert)
+
+    q = sub.add_parser("quantize", help="int8 model from an fp32 model_bin and calibration frames")
+    q.add_argument("model", help="fp32 .aprt written by convert")
+    q.add_argument("--calibration", required=True,
+                   help="DeepLoc-layout folder (poses.txt + images) or .npy [N,H,W,C] of "
+                        "preprocessed inputs")
+    q.add_argument("-o", "--output", required=True)
+    q.add_argument("--method", default="percentile", choices=("minmax", "percentile", "mse"))
+    q.add_argument("--percentile", type=float, default=99.99)
+    q.add_argument("--frames", type=int, default=64, help="calibration frames used (evenly spread)")
+    q.add_argument("--fp32-ops", help="regular expression: ops whose name matches stay fp32")
+    q.add_argument("--backbone", action="store_true",
+                   help="also the backbone's 1x1 convolutions (faster, less accurate)")
+    q.add_argument("-v", "--verbose", action="store_true", help="print each int8 op's range")
+    q.set_defaults(fn=cmd_quantize)
 
     t = sub.add_parser("train", help="train the reference model on a DeepLoc-layout sequence (CPU)")
     t.add_argument("--data", required=True, help="folder with poses.txt and the images")

@@ -52,3 +52,37 @@ def make_golden(cfg: AprConfig, out_dir: str, *, seed: int = 1, opset: int = 13,
         raise RuntimeError(f"outputs barely vary across inputs (relative spread {spread:.3f} < "
                            f"{MIN_SPREAD}): the golden data would prove nothing")
     return manifest
+
+
+def make_golden_int8(src_dir: str, out_dir: str, method: str = "percentile") -> dict:
+    """Golden data for the int8 path: quantises `src_dir`/model.aprt (calibrated
+    on the golden inputs) and writes the int8 graph's outputs as computed by the
+    converter's statement of the runtime's int8 arithmetic (engine_ir), next to
+    the same inputs."""
+    import glob
+    import shutil
+
+    from .convert import engine_ir
+    from .convert.quantize import quantize_model
+    from .model_bin import spec
+    from .model_bin.reader import read
+
+    os.makedirs(out_dir, exist_ok=True)
+    fp32 = open(os.path.join(src_dir, "model.aprt"), "rb").read()
+    _, meta = read(fp32)
+    _, h, w, c = meta["input_shape"]
+    names = sorted(glob.glob(os.path.join(src_dir, "in_*.f32")))
+    xs = [np.fromfile(n, "<f4").reshape(1, c, h, w).transpose(0, 2, 3, 1) for n in names]
+    calib = os.path.join(out_dir, "calibration.npy")
+    np.save(calib, np.concatenate(xs).astype(np.float32))
+    blob, report = quantize_model(fp32, calib, method=method, frames=len(xs))
+    with open(os.path.join(out_dir, "model.aprt"), "wb") as f:
+        f.write(blob)
+    eg, _ = read(blob)
+    inp = next(t for t in eg.tensors if t.kind == spec.KIND_INPUT)
+    out = next(t for t in eg.tensors if t.kind == spec.KIND_OUTPUT)
+    for k, (name, x) in enumerate(zip(names, xs)):
+        shutil.copyfile(name, os.path.join(out_dir, f"in_{k}.f32"))
+        y = engine_ir.run(eg, {inp: x})[id(out)]
+        np.asarray(y, "<f4").tofile(os.path.join(out_dir, f"out_{k}.f32"))
+    return dict(ops=len(report.ops), frames=report.frames)

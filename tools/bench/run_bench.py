@@ -6,9 +6,11 @@ its postinstall wants CUDA downloads), makes the full APR-Transformer at each
 input size (random input-sensitive weights; speed does not depend on them),
 then runs ORT and aprt in interleaved rounds -- ORT, aprt, ORT, aprt, ... --
 so that both see the same machine state, and prints medians, p99 and the
-ratio ORT/aprt. --markdown FILE also writes the table.
+ratio ORT/aprt. --markdown FILE also writes the table. Unless --no-int8, the
+model is also quantised (python3 -m aprt_tools quantize, calibrated on frames
+of data/demo_drive; default policy) and aprt int8 runs in the same rounds.
 
-  tools/bench/run_bench.py [--sizes 224,128] [--threads 1,2] [--rounds 5] [--runs 20]
+  tools/bench/run_bench.py [--sizes 224,128] [--threads 1,2] [--rounds 5] [--runs 20] [--no-int8]
 """
 
 import argparse
@@ -45,6 +47,17 @@ def ensure_model(size, out_root):
         sh([PYTHON, "-m", "aprt_tools", "golden", "--config", "full", "--size", str(size),
             "--count", "2", "--convert", "--out", d], env=env)
     return d
+
+
+def ensure_int8(d):
+    out = os.path.join(d, "model_int8.aprt")
+    if not os.path.exists(out):
+        print(f"run_bench: quantising {d}/model.aprt", flush=True)
+        env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "tools"), PYTHONWARNINGS="ignore")
+        sh([PYTHON, "-m", "aprt_tools", "quantize", os.path.join(d, "model.aprt"),
+            "--calibration", os.path.join(ROOT, "data", "demo_drive"), "--frames", "4",
+            "-o", out], env=env)
+    return out
 
 
 def p99(xs):
@@ -86,6 +99,7 @@ def main():
     ap.add_argument("--aprt", default=os.path.join(ROOT, "build", "release", "bin", "aprt"))
     ap.add_argument("--models", default=os.path.join(ROOT, "build", "bench"))
     ap.add_argument("--markdown", help="also write the table to this file")
+    ap.add_argument("--no-int8", action="store_true", help="fp32 only")
     a = ap.parse_args()
     if not os.path.exists(a.aprt):
         sys.exit(f"run_bench: {a.aprt} not found: build first (tools/setup.sh)")
@@ -95,6 +109,8 @@ def main():
     models = {s: ensure_model(s, a.models) for s in sizes}
     ort = {(s, t): [] for s in sizes for t in threads}
     ours = {(s, t): [] for s in sizes for t in threads}
+    int8 = {(s, t): [] for s in sizes for t in threads}
+    int8_models = {} if a.no_int8 else {s: ensure_int8(models[s]) for s in sizes}
     info = {}
     for r in range(a.rounds):
         for s in sizes:
@@ -103,20 +119,29 @@ def main():
                 ms, d = run_aprt(a.aprt, os.path.join(models[s], "model.aprt"), t, a.runs)
                 ours[(s, t)] += ms
                 info[(s, t)] = d
+                if s in int8_models:
+                    ms, _ = run_aprt(a.aprt, int8_models[s], t, a.runs)
+                    int8[(s, t)] += ms
         print(f"run_bench: round {r + 1}/{a.rounds} done", flush=True)
     now = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
     head = (f"ONNX Runtime (onnxruntime-node 1.30.0, graph optimisation 'all', sequential) vs aprt, "
             f"{a.rounds} interleaved rounds x {a.runs} runs each; {cpu_name()}, "
             f"{os.cpu_count()} cores; {now}.")
-    lines = ["| input | threads | ORT median ms | ORT p99 | aprt median ms | aprt p99 | ORT / aprt | aprt kernels | allocations/frame |",
-             "|---|---:|---:|---:|---:|---:|---:|---|---:|"]
+    q = "" if a.no_int8 else " aprt int8 median ms | int8 p99 | ORT / int8 |"
+    lines = ["| input | threads | ORT median ms | ORT p99 | aprt median ms | aprt p99 | ORT / aprt |" +
+             q + " aprt kernels | allocations/frame |",
+             "|---|---:|---:|---:|---:|---:|---:|" + ("" if a.no_int8 else "---:|---:|---:|") +
+             "---|---:|"]
     for s in sizes:
         for t in threads:
             om, am = statistics.median(ort[(s, t)]), statistics.median(ours[(s, t)])
             d = info[(s, t)]
-            lines.append(f"| {s}x{s} | {t} | {om:.1f} | {p99(ort[(s, t)]):.1f} | {am:.1f} | "
-                         f"{p99(ours[(s, t)]):.1f} | **{om / am:.2f}x** | {d['isa']} | "
-                         f"{d['allocations_during_runs']} |")
+            row = (f"| {s}x{s} | {t} | {om:.1f} | {p99(ort[(s, t)]):.1f} | {am:.1f} | "
+                   f"{p99(ours[(s, t)]):.1f} | **{om / am:.2f}x** |")
+            if not a.no_int8:
+                qm = statistics.median(int8[(s, t)])
+                row += f" {qm:.1f} | {p99(int8[(s, t)]):.1f} | **{om / qm:.2f}x** |"
+            lines.append(row + f" {d['isa']} | {d['allocations_during_runs']} |")
     table = head + "\n\n" + "\n".join(lines) + "\n"
     print()
     print(table)

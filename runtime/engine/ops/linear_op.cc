@@ -74,6 +74,7 @@ Status prepare_linear(OpNode& node) {
   const Tensor* w = node.in[1];
   const Tensor* b = node.in[2];
   const Tensor* y = node.out[0];
+  if (w && w->dtype == format::DType::kI8) return prepare_qlinear(node);
   Status st;
   if (!(st = expect_f32(node, x, "input", false))) return st;
   if (!(st = expect_f32(node, w, "weights", true))) return st;

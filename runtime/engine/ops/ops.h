@@ -8,6 +8,7 @@ namespace aprt::ops {
 Status prepare_conv2d(OpNode& node);
 Status prepare_dwconv2d(OpNode& node);
 Status prepare_linear(OpNode& node);
+Status prepare_qlinear(OpNode& node);  // LINEAR with int8 weights
 Status prepare_squeeze_excite(OpNode& node);
 Status prepare_add(OpNode& node);
 Status prepare_layernorm(OpNode& node);

@@ -23,6 +23,11 @@ class Tensor:
     kind: int = spec.KIND_ACTIVATION
     data: np.ndarray | None = None  # constants only, already in engine layout
     dtype: int = spec.DTYPE_F32
+    # Quantised constants (int8 weights): per-tensor scale, zero point, or the
+    # Tensor of per-channel scales.
+    scale: float = 0.0
+    zero_point: int = 0
+    qscale: "Tensor | None" = None
 
     @property
     def numel(self) -> int:
@@ -63,6 +68,7 @@ class EngineGraph:
     def prune(self):
         """Drop tensors nothing references."""
         used = {id(t) for op in self.ops for t in op.inputs + op.outputs if t is not None}
+        used |= {id(t.qscale) for t in self.tensors if id(t) in used and t.qscale is not None}
         self.tensors = [t for t in self.tensors if id(t) in used or t.kind in
                         (spec.KIND_INPUT, spec.KIND_OUTPUT)]
 
@@ -100,6 +106,32 @@ def conv2d_nhwc(x, w, b, stride, pads, depthwise):
     return y.numpy().transpose(0, 2, 3, 1)
 
 
+def quantize_u8(x: np.ndarray, scale: float, zero: int) -> np.ndarray:
+    """The runtime's activation quantiser: float32 x * (1/scale), round half to
+    even, + zero, clamped to 0..255 (kernels/ref/qs8_gemm__ref.cc)."""
+    inv = np.float32(1.0) / np.float32(scale)
+    q = np.rint(np.asarray(x, np.float32) * inv) + np.float32(zero)
+    return np.clip(q, 0, 255).astype(np.int64)
+
+
+def quantised_linear(op: Op, ins: list) -> np.ndarray:
+    """LINEAR with int8 weights, as the runtime computes it: exact integer
+    accumulation, y = fma(acc, input_scale * w_scale[j], b[j]), then act, then R."""
+    p = op.params
+    x, b = ins[0], ins[2]
+    w = op.inputs[1]
+    k = w.shape[1]
+    q = quantize_u8(x.reshape(-1, k), p["input_scale"], p["input_zero"]) - int(p["input_zero"])
+    acc = q @ w.data.astype(np.int64).T
+    ws = w.qscale.data if w.qscale is not None else np.full(w.shape[0], w.scale, np.float32)
+    mult = (np.float32(p["input_scale"]) * ws.astype(np.float32)).astype(np.float64)
+    y = acc.astype(np.float64) * mult + b
+    y = activation(y, p.get("act", 0))
+    if len(ins) > 3 and ins[3] is not None:
+        y = y + ins[3].reshape(y.shape)
+    return y
+
+
 def run_op(op: Op, get) -> list:
     """Evaluate one op in float64; `get(tensor)` returns an input's value."""
     p = op.params
@@ -111,6 +143,8 @@ def run_op(op: Op, get) -> list:
         y = activation(y, p.get("act", 0))
         if len(ins) > 3 and ins[3] is not None:
             y = y + ins[3].reshape(y.shape)
+    elif c == spec.OP_LINEAR and op.inputs[1].dtype == spec.DTYPE_I8:
+        y = quantised_linear(op, ins)
     elif c == spec.OP_LINEAR:
         x, w, b = ins[0], ins[1], ins[2]
         k = w.shape[1]

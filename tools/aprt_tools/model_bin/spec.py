@@ -6,7 +6,7 @@ tests/tools/test_spec_agreement.py checks that the two agree.
 
 MAGIC = b"APRTMDL\x00"
 VERSION_MAJOR = 1
-VERSION_MINOR = 0
+VERSION_MINOR = 1  # 1.1 adds int8 LINEAR weights and 'quantization'
 HEADER_BYTES = 64
 SECTION_ENTRY_BYTES = 32
 TENSOR_ENTRY_BYTES = 64
@@ -74,6 +74,7 @@ META_KEYS = {
     35: (T_U32, "dim_feedforward"),
     40: (T_F32, "val_error"),  # median position error (m), orientation error (deg)
     41: (T_STR, "config_json"),
+    42: (T_STR, "quantization"),  # JSON: method, calibration set, per-op policy
 }
 META_BY_NAME = {name: (key, typ) for key, (typ, name) in META_KEYS.items()}
 META_REQUIRED = ("producer", "source_sha256", "modality", "input_shape", "norm_mean", "norm_std",

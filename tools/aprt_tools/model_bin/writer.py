@@ -57,6 +57,10 @@ def encode_meta(meta: dict, strings: Strings) -> bytes:
     return bytes(out)
 
 
+_NUMPY_DTYPE = {spec.DTYPE_F32: "<f4", spec.DTYPE_I8: "i1", spec.DTYPE_I32: "<i4",
+                spec.DTYPE_U8: "u1"}
+
+
 def _op_params(op) -> list:
     p = op.params
     f = lambda v: struct.unpack("<i", struct.pack("<f", float(v)))[0]
@@ -64,6 +68,8 @@ def _op_params(op) -> list:
     if c in (spec.OP_CONV2D, spec.OP_DWCONV2D):
         return [p["stride"][0], p["stride"][1], *p["pads"], p.get("act", 0)]
     if c == spec.OP_LINEAR:
+        if "input_scale" in p:  # int8 weights: the input's quantisation (FORMAT.md)
+            return [p.get("act", 0), f(p["input_scale"]), int(p["input_zero"])]
         return [p.get("act", 0)]
     if c == spec.OP_LAYERNORM:
         return [f(p["eps"])]
@@ -88,12 +94,13 @@ def serialise(eg, meta: dict) -> bytes:
         dims = list(t.shape) + [0] * (spec.MAX_RANK - len(t.shape))
         off = size = 0
         if t.kind == spec.KIND_CONST:
-            data = np.ascontiguousarray(t.data, dtype="<f4").tobytes()
+            data = np.ascontiguousarray(t.data, dtype=_NUMPY_DTYPE[t.dtype]).tobytes()
             off = _align(len(weights))
             weights += b"\x00" * (off - len(weights)) + data
             size = len(data)
         tens += struct.pack("<IBBBB4IQQfii12x", strings.add(t.name), t.dtype, len(t.shape),
-                            t.kind, 0, *dims, off, size, 0.0, 0, -1)
+                            t.kind, 0, *dims, off, size, float(t.scale), int(t.zero_point),
+                            -1 if t.qscale is None else index[id(t.qscale)])
     ops = bytearray(struct.pack("<IIII", len(eg.ops), spec.OP_ENTRY_BYTES, 0, 0))
     for op in eg.ops:
         ins = [index[id(t)] if t is not None else -1 for t in op.inputs]
