@@ -67,7 +67,7 @@ void u8_quantize__neon(size_t n, const float* x, float inv_scale, int32_t zero, 
 }
 
 namespace {
-const QKernelSet kSet = {"neon", kMr, kNr, kG, gemm, u8_quantize__neon};
+const QKernelSet kSet = {"neon", kMr, kNr, kG, gemm, u8_quantize__neon, qu8s8_dwconv__neon};
 }  // namespace
 
 const QKernelSet* qkernel_set_neon() {

@@ -37,6 +37,23 @@ struct QGemmArgs {
   Act act;  // kNone or kRelu
 };
 
+// int8 depthwise convolution: X uint8 NHWC (per-tensor zero point), W int8
+// [KH][KW][C] per-channel symmetric, given to the fast kernels as floats
+// (exact; packed once at load), y = act(mult[c] * acc + bias[c]).
+struct QDwConvArgs {
+  Conv2dShape shape;
+  const uint8_t* x;
+  int32_t a_zero;
+  const float* w;  // [KH][KW][C], the int8 values as floats
+  const float* mult;
+  const float* bias;
+  Act act;  // any: applied in fp32 after the epilogue
+  float* y;
+};
+// The fast depthwise kernels accumulate in float, exact while the window has
+// at most this many taps (255 * 127 * taps < 2^24).
+inline constexpr int kMaxQDwTaps = 256;
+
 struct QKernelSet {
   const char* isa;  // "avx512vnni", "avx2", "neondot", "neon"
   int mr, nr, kgroup;
@@ -44,7 +61,13 @@ struct QKernelSet {
   void (*gemm)(const QGemmArgs& g, int r0, int r1, int p0, int p1);
   // q[i] = clamp(round_half_even(x[i] * inv_scale) + zero, 0, 255).
   void (*quantize)(size_t n, const float* x, float inv_scale, int32_t zero, uint8_t* q);
+  // Output rows [oy0, oy1) of an int8 depthwise convolution.
+  void (*dwconv_rows)(const QDwConvArgs& a, int oy0, int oy1);
 };
+
+void qu8s8_dwconv__avx512(const QDwConvArgs& a, int oy0, int oy1);
+void qu8s8_dwconv__avx2(const QDwConvArgs& a, int oy0, int oy1);
+void qu8s8_dwconv__neon(const QDwConvArgs& a, int oy0, int oy1);
 
 // Packs W [n][k] int8 (row-major, as LINEAR stores it) into panels of nr
 // columns with k in groups of kgroup (zero-padded in both):

@@ -563,12 +563,14 @@ class ModelFileParser {
                   t.name, t.scale > 0.0f ? "both" : "neither");
       if (t.qscale_tensor < 0) continue;
       const TensorEntry& q = ts[size_t(t.qscale_tensor)];
+      // Channels are the first axis of LINEAR weights, the last of depthwise ones.
+      const uint32_t first = t.dims[0], last = t.dims[t.rank - 1];
       APRT_ENSURE(q.dtype == DType::kF32 && q.kind == TensorKind::kConst && q.rank == 1 &&
-                      q.numel == t.dims[0],
+                      (q.numel == first || q.numel == last),
                   Errc::kBadTensor,
-                  "model_bin: per-channel scales '%s' of '%s' must be an f32 constant of %u "
-                  "values (one per output channel)",
-                  q.name, t.name, t.dims[0]);
+                  "model_bin: per-channel scales '%s' of '%s' must be an f32 constant of one "
+                  "value per channel (%u, or %u for depthwise weights)",
+                  q.name, t.name, first, last);
       const uint8_t* base = file_.weights_ + q.data_offset;
       for (uint64_t j = 0; j < q.numel; ++j) {
         const float v = load<float>(base + 4 * j);

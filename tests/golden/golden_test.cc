@@ -4,7 +4,11 @@
 // --convert`: model.aprt, in_K.f32 (NCHW, normalised) and out_K.f32 (7 values).
 // The error measure: for each output i, |got_i - want_i| / max(|want_i|, 0.1 * max_j |want_j|),
 // i.e. relative, with a floor at a tenth of the largest output so that values
-// near zero are judged on the output's scale. The bound is 1e-4.
+// near zero are judged on the output's scale. The bound is 1e-4, or
+// APRT_GOLDEN_TOLERANCE: int8 models are judged against the converter's
+// statement of the int8 arithmetic, and an activation that an ISA's fp32 op
+// computes a last bit differently can round to the neighbouring int8 step, a
+// jump no fp32 tolerance describes (tests/CMakeLists.txt sets the bound).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -53,6 +57,8 @@ TEST(Golden, MatchesReference) {
   ASSERT_TRUE(loaded) << loaded.error().message();
   Engine& e = *loaded.value();
   const auto& shape = e.meta().input_shape;
+  const char* tol_env = std::getenv("APRT_GOLDEN_TOLERANCE");
+  const double tolerance = tol_env ? std::atof(tol_env) : kTolerance;
   int checked = 0;
   for (int k = 0; std::filesystem::exists(dir + "/in_" + std::to_string(k) + ".f32"); ++k) {
     const auto x = test::read_f32(dir + "/in_" + std::to_string(k) + ".f32");
@@ -63,7 +69,7 @@ TEST(Golden, MatchesReference) {
     std::memcpy(e.input().f32(), nhwc.data(), nhwc.size() * sizeof(float));
     ASSERT_TRUE(e.run());
     const double err = golden_error(e.output().f32(), want);
-    EXPECT_LE(err, kTolerance) << "input " << k;
+    EXPECT_LE(err, tolerance) << "input " << k;
     std::printf("golden %s input %d (%s kernels, %d threads): max relative error %.2e\n",
                 dir.c_str(), k, e.isa(), e.threads(), err);
     ++checked;

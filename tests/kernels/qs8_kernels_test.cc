@@ -2,9 +2,11 @@
 // bit for bit, on random odd shapes, for every ISA this CPU can run (the
 // others are skipped, and say so): GEMM with every epilogue, called whole and
 // in row/panel pieces as the thread pool splits it, and the quantiser on
-// halfway values, huge values, infinities and NaN.
+// halfway values, huge values, infinities and NaN; the depthwise convolution
+// on odd channel counts, kernel sizes, strides and asymmetric padding.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -14,6 +16,7 @@
 
 #include "kernels/common/cpu_features.h"
 #include "kernels/common/qkernel_set.h"
+#include "kernels/ref/qs8_dwconv2d__ref.h"
 #include "kernels/ref/qs8_gemm__ref.h"
 
 namespace aprt::kernels {
@@ -153,6 +156,48 @@ TEST_P(QKernels, QuantizeBitExact) {
         }
         for (size_t i = n; i < n + 8; ++i) ASSERT_EQ(got[i], 0xEE) << "wrote past the end";
       }
+    }
+  }
+}
+
+TEST_P(QKernels, DwConvBitExactOnOddShapes) {
+  std::mt19937 rng(4321);
+  struct Case {
+    int h, w, c, k, stride, pt, pl, pb, pr;
+  };
+  const Case cases[] = {
+      {1, 1, 1, 3, 1, 1, 1, 1, 1},   {5, 7, 3, 3, 1, 1, 1, 1, 1},    {9, 8, 17, 3, 2, 0, 0, 1, 1},
+      {6, 11, 33, 5, 1, 2, 2, 2, 2}, {13, 9, 16, 5, 2, 1, 2, 2, 1},  {4, 4, 40, 3, 2, 1, 0, 1, 0},
+      {8, 5, 7, 1, 1, 0, 0, 0, 0},   {16, 16, 96, 3, 2, 0, 0, 1, 1}, {3, 17, 65, 5, 1, 0, 4, 4, 0}};
+  std::uniform_real_distribution<float> mu(1e-4f, 3e-2f), bi(-2.0f, 2.0f);
+  for (const Case& cs : cases) {
+    Conv2dShape s{cs.h, cs.w, cs.c, 0, 0, cs.c, cs.k, cs.k, cs.stride, cs.stride, cs.pt, cs.pl};
+    s.out_h = (cs.h + cs.pt + cs.pb - cs.k) / cs.stride + 1;
+    s.out_w = (cs.w + cs.pl + cs.pr - cs.k) / cs.stride + 1;
+    std::vector<uint8_t> x(size_t(cs.h) * cs.w * cs.c);
+    for (uint8_t& v : x) v = uint8_t(rng());
+    std::vector<int8_t> w(size_t(cs.k) * cs.k * cs.c);
+    for (int8_t& v : w) v = int8_t(int(rng() % 255) - 127);
+    std::vector<float> wf(w.begin(), w.end()), mult(cs.c), bias(cs.c);
+    for (float& v : mult) v = mu(rng);
+    for (float& v : bias) v = bi(rng);
+    const int32_t zero = int32_t(rng() % 256);
+    const size_t out = size_t(s.out_h) * s.out_w * cs.c;
+    for (Act act : {Act::kNone, Act::kRelu, Act::kSilu}) {
+      std::vector<float> want(out), got(out + 16, -7.0f);
+      qu8s8_dwconv2d__ref(s, x.data(), zero, w.data(), mult.data(), bias.data(), act, want.data());
+      const QDwConvArgs a{s, x.data(), zero, wf.data(), mult.data(), bias.data(), act, got.data()};
+      // In row pieces, as the thread pool splits it.
+      for (int r0 = 0; r0 < s.out_h; r0 += 2) ks_->dwconv_rows(a, r0, std::min(r0 + 2, s.out_h));
+      for (size_t i = 0; i < out; ++i) {
+        if (act == Act::kSilu) {  // the vector sigmoid is an approximation
+          ASSERT_NEAR(got[i], want[i], 1e-5f * (1.0f + std::fabs(want[i]))) << i;
+        } else {
+          ASSERT_EQ(got[i], want[i]) << "case " << cs.h << "x" << cs.w << "x" << cs.c << " k"
+                                     << cs.k << " s" << cs.stride << " at " << i;
+        }
+      }
+      for (size_t i = out; i < got.size(); ++i) ASSERT_EQ(got[i], -7.0f) << "wrote past the end";
     }
   }
 }

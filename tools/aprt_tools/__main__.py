@@ -30,7 +30,7 @@ def cmd_golden(a):
 def cmd_golden_int8(a):
     from .golden import make_golden_int8
 
-    m = make_golden_int8(a.source, a.out)
+    m = make_golden_int8(a.source, a.out, backbone=a.backbone)
     print(f"golden-int8: {a.source} -> {a.out} ({m['ops']} int8 ops, {m['frames']} frames)")
 
 
@@ -86,12 +86,18 @@ def cmd_quantize(a):
     try:
         blob, report = quantize_model(open(a.model, "rb").read(), a.calibration, method=a.method,
                                       percentile=a.percentile, frames=a.frames,
-                                      fp32_ops=a.fp32_ops, backbone=a.backbone)
+                                      fp32_ops=a.fp32_ops, backbone=a.backbone,
+                                      sensitivity=a.sensitivity)
     except (CalibrationError, ModelBinError, OSError) as e:
         print(f"quantize: {a.model}: {e}", file=sys.stderr)
         sys.exit(2)
     with open(a.output, "wb") as f:
         f.write(blob)
+    if report.sensitivity:
+        print("quantize: each op alone in int8, worst deviation from fp32 on the calibration "
+              "frames (most costly first):")
+        for name, m, d in sorted(report.sensitivity, key=lambda r: -r[1]):
+            print(f"  {m:8.4f} m  {d:8.4f} deg  {name}")
     if a.verbose:
         for name, rows, k, n, scale, zero in report.ops:
             print(f"  {name}: {rows}x{k} -> {n}, input scale {scale:.4g} zero {zero}")
@@ -157,6 +163,7 @@ def main(argv=None):
     gi = sub.add_parser("golden-int8", help="quantise a golden model; expected int8 outputs")
     gi.add_argument("source", help="folder written by golden --convert")
     gi.add_argument("--out", required=True)
+    gi.add_argument("--backbone", action="store_true", help="also the backbone (depthwise too)")
     gi.set_defaults(fn=cmd_golden_int8)
 
     e = sub.add_parser("export", help="export the reference model (optionally a checkpoint)")
@@ -191,6 +198,8 @@ def main(argv=None):
     q.add_argument("--fp32-ops", help="regular expression: ops whose name matches stay fp32")
     q.add_argument("--backbone", action="store_true",
                    help="also the backbone's 1x1 convolutions (faster, less accurate)")
+    q.add_argument("--sensitivity", action="store_true",
+                   help="also measure each op alone in int8 (which ops cost accuracy)")
     q.add_argument("-v", "--verbose", action="store_true", help="print each int8 op's range")
     q.set_defaults(fn=cmd_quantize)
 

@@ -68,7 +68,8 @@ Status prepare(OpNode& node, bool depthwise) {
   const Tensor* y = node.out[0];
   Status st;
   if (!(st = expect_f32(node, x, "input", false))) return st;
-  if (!(st = expect_f32(node, w, "weights", true))) return st;
+  const bool int8 = depthwise && w->dtype == format::DType::kI8;  // qdwconv2d_op.cc
+  if (!int8 && !(st = expect_f32(node, w, "weights", true))) return st;
   if (!(st = expect_f32(node, b, "bias", true))) return st;
   if (!(st = expect_f32(node, y, "output", false))) return st;
   const int any4[4] = {1, -1, -1, -1};
@@ -115,13 +116,14 @@ Status prepare(OpNode& node, bool depthwise) {
   s.shape = {x->dims[1], x->dims[2], ci, oh, ow, co, kh, kw, sh, sw, pt, pl};
   s.act = static_cast<kernels::Act>(p[6]);
   node.flops = 2ull * uint64_t(oh) * ow * co * kh * kw * (depthwise ? 1 : ci);
+  // Rows per task: at least ~32k multiply-adds each.
+  const long long per_row = static_cast<long long>(node.flops / 2) / oh;
+  const int min_rows = per_row > 0 ? int((32768 + per_row - 1) / per_row) : 1;
+  int tasks = node.threads <= 1 ? 1 : 4 * node.threads;
+  if (tasks > oh / (min_rows > 0 ? min_rows : 1)) tasks = oh / (min_rows > 0 ? min_rows : 1);
+  s.rows = make_split(oh, 1, tasks < 1 ? 1 : tasks);
+  if (int8) return prepare_qdwconv2d(node, s.shape, s.rows);
   if (node.ks) {
-    // Rows per task: at least ~32k multiply-adds each.
-    const long long per_row = static_cast<long long>(node.flops / 2) / oh;
-    const int min_rows = per_row > 0 ? int((32768 + per_row - 1) / per_row) : 1;
-    int tasks = node.threads <= 1 ? 1 : 4 * node.threads;
-    if (tasks > oh / (min_rows > 0 ? min_rows : 1)) tasks = oh / (min_rows > 0 ? min_rows : 1);
-    s.rows = make_split(oh, 1, tasks < 1 ? 1 : tasks);
     node.kernel = node.ks->isa;
     if (depthwise) {
       node.eval = eval_dwconv2d_fast;

@@ -132,12 +132,32 @@ def quantised_linear(op: Op, ins: list) -> np.ndarray:
     return y
 
 
+def _mult(op: Op, w: "Tensor") -> np.ndarray:
+    """input scale x weight scale per channel, as the runtime's float32 product."""
+    ws = w.qscale.data if w.qscale is not None else np.full(w.shape[-1], w.scale, np.float32)
+    return (np.float32(op.params["input_scale"]) * ws.astype(np.float32)).astype(np.float64)
+
+
+def quantised_dwconv(op: Op, ins: list) -> np.ndarray:
+    """DWCONV2D with int8 weights [KH, KW, C]: the integer sums (exact in float64),
+    y = acc * mult[c] + b[c], then act."""
+    p = op.params
+    zero = int(p["input_zero"])
+    q = (quantize_u8(ins[0], p["input_scale"], zero) - zero).astype(np.float64)
+    w = op.inputs[1]
+    acc = conv2d_nhwc(q, w.data.astype(np.float64), np.zeros(w.shape[-1]), p["stride"],
+                      p["pads"], True)
+    return activation(acc * _mult(op, w) + ins[2], p.get("act", 0))
+
+
 def run_op(op: Op, get) -> list:
     """Evaluate one op in float64; `get(tensor)` returns an input's value."""
     p = op.params
     ins = [None if t is None else np.asarray(get(t), np.float64) for t in op.inputs]
     c = op.code
-    if c in (spec.OP_CONV2D, spec.OP_DWCONV2D):
+    if c == spec.OP_DWCONV2D and op.inputs[1].dtype == spec.DTYPE_I8:
+        y = quantised_dwconv(op, ins)
+    elif c in (spec.OP_CONV2D, spec.OP_DWCONV2D):
         x, w, b = ins[0], ins[1], ins[2]
         y = conv2d_nhwc(x, w, b, p["stride"], p["pads"], c == spec.OP_DWCONV2D)
         y = activation(y, p.get("act", 0))

@@ -15,8 +15,8 @@
    projections, the transformers' projections and feed-forward layers) become
    int8; everything else -- the backbone (found from the graph: whatever leads
    to a depthwise convolution or squeeze-excite, and the 1x1 convolutions right
-   after one; `--backbone` makes its 1x1 convolutions int8 too, at a measured
-   accuracy cost, see docs/int8.md), LayerNorm, attention, GELU, the single-row decoder and the
+   after one; `--backbone` makes its 1x1 and depthwise convolutions int8 too,
+   at a measured accuracy cost, see docs/int8.md), LayerNorm, attention, GELU, the single-row decoder and the
    pose heads -- stays fp32. `--fp32-ops REGEX` keeps more ops in fp32 by name. The policy is written into the file as the
    int8 dtype of each chosen op's weights, and described in the 'quantization'
    metadata.
@@ -205,9 +205,12 @@ def int8_candidates(eg, fp32_ops: str | None, backbone: bool = False) -> list:
     skip = set() if backbone else backbone_ops(eg)
     out = []
     for op in eg.ops:
-        if op.code != spec.OP_LINEAR or op.inputs[1].dtype != spec.DTYPE_F32:
+        if op.inputs[1].dtype != spec.DTYPE_F32:
             continue
-        if id(op) in skip:
+        if op.code == spec.OP_DWCONV2D and backbone:
+            out.append(op)
+            continue
+        if op.code != spec.OP_LINEAR or id(op) in skip:
             continue
         rows = int(np.prod(op.inputs[0].shape[:-1]))
         if rows <= 1:  # single-row decoder and heads: no gain, only error
@@ -232,17 +235,18 @@ class QuantReport:
     frames: int = 0
     deviation_m: list = field(default_factory=list)
     deviation_deg: list = field(default_factory=list)
+    sensitivity: list = field(default_factory=list)  # (op, max m, max deg) with it alone int8
 
     def text(self) -> str:
         dm, dd = np.asarray(self.deviation_m), np.asarray(self.deviation_deg)
-        return (f"{len(self.ops)} LINEAR ops int8, calibrated on {self.frames} frames; "
+        return (f"{len(self.ops)} ops int8, calibrated on {self.frames} frames; "
                 f"int8 vs fp32 on those frames: position p50 {np.median(dm):.4f} / max "
                 f"{dm.max():.4f} m, orientation p50 {np.median(dd):.4f} / max {dd.max():.4f} deg")
 
 
 def quantize_model(data: bytes, calibration: str, *, method: str = "percentile",
                    percentile: float = 99.99, frames: int = 64, fp32_ops: str | None = None,
-                   backbone: bool = False, seed: int = 0):
+                   backbone: bool = False, sensitivity: bool = False, seed: int = 0):
     """fp32 model_bin bytes -> (int8 model_bin bytes, QuantReport)."""
     if method not in METHODS:
         raise CalibrationError(f"calibration: method {method!r} (one of {', '.join(METHODS)})")
@@ -268,30 +272,59 @@ def quantize_model(data: bytes, calibration: str, *, method: str = "percentile",
             observed[id(op)].add(vals[id(op.inputs[0])], rng)
         fp32_out.append(vals[id(out)].reshape(-1))
     report = QuantReport(frames=len(inputs))
+    plans = {}
     for op in ops:
         scale, zero = choose_range(observed[id(op)], method, percentile)
         w = op.inputs[1]
-        q, scales = quantize_weights(w.data)
-        qs = eg.add(Tensor(w.name + ".qscale", (w.shape[0],), spec.KIND_CONST, scales))
+        if op.code == spec.OP_DWCONV2D:  # [KH, KW, C]: channels last
+            q, scales = quantize_weights(w.data.reshape(-1, w.shape[-1]).T)
+            q = np.ascontiguousarray(q.T.reshape(w.shape))
+        else:
+            q, scales = quantize_weights(w.data)
+        qs = eg.add(Tensor(w.name + ".qscale", (len(scales),), spec.KIND_CONST, scales))
         qw = eg.add(Tensor(w.name + ".int8", w.shape, spec.KIND_CONST, q, dtype=spec.DTYPE_I8,
                            qscale=qs))
-        op.inputs[1] = qw
-        op.params.update(input_scale=scale, input_zero=zero)
-        report.ops.append((op.name, int(np.prod(op.inputs[0].shape[:-1])), w.shape[1],
-                           w.shape[0], scale, zero))
+        plans[id(op)] = (w, qw, scale, zero)
+
+    def set_int8(op, on: bool):
+        w, qw, scale, zero = plans[id(op)]
+        op.inputs[1] = qw if on else w
+        if on:
+            op.params.update(input_scale=scale, input_zero=zero)
+        else:
+            op.params.pop("input_scale", None)
+            op.params.pop("input_zero", None)
+
+    def deviations():
+        dm, dd = [], []
+        for x, ref in zip(inputs, fp32_out):
+            got = engine_ir.run(eg, {inp: x})[id(out)].reshape(-1)
+            m, d = _pose_dev(np.asarray(got, np.float64), np.asarray(ref, np.float64), meta)
+            dm.append(m)
+            dd.append(d)
+        return dm, dd
+
+    if sensitivity:  # each op alone in int8: which ones cost accuracy
+        for op in ops:
+            set_int8(op, True)
+            dm, dd = deviations()
+            set_int8(op, False)
+            report.sensitivity.append((op.name, float(np.max(dm)), float(np.max(dd))))
+    for op in ops:
+        set_int8(op, True)
+        w, _, scale, zero = plans[id(op)]
+        k, n = (int(np.prod(w.shape[:-1])), w.shape[-1]) if op.code == spec.OP_DWCONV2D else \
+            (w.shape[1], w.shape[0])
+        report.ops.append((op.name, int(np.prod(op.inputs[0].shape[:-1])), k, n, scale, zero))
     eg.prune()
-    for x, ref in zip(inputs, fp32_out):
-        got = engine_ir.run(eg, {inp: x})[id(out)].reshape(-1)
-        dm, dd = _pose_dev(np.asarray(got, np.float64), np.asarray(ref, np.float64), meta)
-        report.deviation_m.append(dm)
-        report.deviation_deg.append(dd)
+    report.deviation_m, report.deviation_deg = deviations()
     meta["quantization"] = json.dumps(dict(
         scheme="u8 activations per tensor (asymmetric), s8 weights per channel (symmetric), "
                "int32 accumulation",
         method=method, percentile=percentile if method == "percentile" else None,
         calibration=os.path.basename(os.path.normpath(calibration)), frames=len(inputs),
-        policy=("LINEAR of more than one row" + (", backbone included" if backbone else
-                                                 ", backbone fp32") +
+        policy=("LINEAR of more than one row" + (", backbone 1x1 and depthwise included"
+                                                 if backbone else ", backbone fp32") +
                 (f", fp32 by name: {fp32_ops}" if fp32_ops else "")),
         int8_ops=[r[0] for r in report.ops]), sort_keys=True)
     return serialise(eg, meta), report

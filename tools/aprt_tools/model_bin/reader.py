@@ -42,7 +42,7 @@ def _params(code: int, raw: list) -> dict:
     return {}
 
 
-def _meta(blob: bytes, strings) -> dict:
+def _meta(blob: bytes) -> dict:
     out, pos = {}, 0
     while pos + 8 <= len(blob):
         key, typ, n = struct.unpack_from("<HHI", blob, pos)
@@ -93,7 +93,7 @@ def read(data: bytes):
     def string(off: int) -> str:
         return strs[off:strs.index(b"\x00", off)].decode("utf-8")
 
-    meta = _meta(sections[spec.SEC_META], string)
+    meta = _meta(sections[spec.SEC_META])
     wght = sections[spec.SEC_WGHT]
     tens = sections[spec.SEC_TENS]
     n_t = struct.unpack_from("<I", tens, 0)[0]
@@ -122,5 +122,7 @@ def read(data: bytes):
         params = _params(code, raw)
         if code == spec.OP_LINEAR and ins[1].dtype == spec.DTYPE_I8:
             params.update(input_scale=_f(raw[1]), input_zero=raw[2])
+        if code == spec.OP_DWCONV2D and ins[1].dtype == spec.DTYPE_I8:
+            params.update(input_scale=_f(raw[7]), input_zero=raw[8])
         g.ops.append(Op(code, string(name), ins, outs, params))
     return g, meta

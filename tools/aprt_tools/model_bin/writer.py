@@ -66,7 +66,10 @@ def _op_params(op) -> list:
     f = lambda v: struct.unpack("<i", struct.pack("<f", float(v)))[0]
     c = op.code
     if c in (spec.OP_CONV2D, spec.OP_DWCONV2D):
-        return [p["stride"][0], p["stride"][1], *p["pads"], p.get("act", 0)]
+        conv = [p["stride"][0], p["stride"][1], *p["pads"], p.get("act", 0)]
+        if "input_scale" in p:  # int8 depthwise weights (FORMAT.md)
+            conv += [f(p["input_scale"]), int(p["input_zero"])]
+        return conv
     if c == spec.OP_LINEAR:
         if "input_scale" in p:  # int8 weights: the input's quantisation (FORMAT.md)
             return [p.get("act", 0), f(p["input_scale"]), int(p["input_zero"])]

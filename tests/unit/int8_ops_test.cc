@@ -1,6 +1,6 @@
-// int8 LINEAR in the engine (issue #4): loading, every kernel path against the
-// int8 reference, determinism across threads, no allocation, and the loader's
-// refusals of inconsistent quantisation parameters.
+// int8 LINEAR and DWCONV2D in the engine (issue #4): loading, every kernel
+// path against the int8 reference, determinism across threads, no allocation,
+// and the loader's refusals of inconsistent quantisation parameters.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -144,7 +144,7 @@ TEST(Int8Linear, LoaderRefusesInconsistentQuantisation) {
         b.set_dims(b.tensor_index("proj.b"), {8});
         b.set_data(b.tensor_index("proj.b"), std::vector<float>(8, 0.1f));
       },
-      "must be an f32 constant of 16 values");
+      "have 8 per-channel scales for 16 output channels");
   expect_refused(
       [](ModelBuilder& b) { b.set_param(b.op_index("proj"), 1, ModelBuilder::f32_bits(0.0f)); },
       "input quantisation scale 0");
@@ -162,6 +162,62 @@ TEST(Int8Linear, LoaderRefusesInconsistentQuantisation) {
         b.set_quant(b.tensor_index("proj.b"), 0, 0, b.tensor_index("proj.w.qscale"));
       },
       "tensor 'proj.b' of type f32 has per-channel quantisation scales");
+}
+
+// The small model's depthwise 3x3 ("dw", 8 channels, SiLU) in int8 as well.
+void int8_dw(ModelBuilder& b) {
+  const int op = b.op_index("dw");
+  std::vector<float> scales(8);
+  std::vector<int8_t> w(3 * 3 * 8);
+  for (int c = 0; c < 8; ++c) scales[c] = 0.003f + 0.001f * float(c);
+  for (size_t i = 0; i < w.size(); ++i) w[i] = int8_t(int((i * 53 + 7) % 255) - 127);
+  const int qs = b.constant("dw.w.qscale", {8}, scales);
+  const int wq = b.constant_i8("dw.w.int8", {3, 3, 8}, w, 0.0f, qs);
+  b.set_inputs(op, {b.tensor_index("stem.out"), wq, b.tensor_index("dw.b")});
+  b.set_param(op, 7, ModelBuilder::f32_bits(0.03f));
+  b.set_param(op, 8, 17);
+}
+
+TEST(Int8DwConv, EveryIsaMatchesTheInt8ReferenceWithoutAllocating) {
+  const auto b = test::make_small_int8_model(int8_dw);
+  auto ref = load(b, "ref");
+  ASSERT_TRUE(ref) << ref.error().message();
+  const auto want = run_once(**ref);
+  int checked = 0;
+  for (const char* isa : {"avx512", "avx2", "neon"}) {
+    auto e = load(b, isa, 2);
+    if (!e && e.error().code() == Errc::kUnsupported) continue;
+    ASSERT_TRUE(e) << e.error().message();
+    const auto got = run_once(**e);
+    for (int i = 0; i < 7; ++i)
+      EXPECT_NEAR(got[i], want[i], 1e-3f * (1 + std::fabs(want[i]))) << isa;
+    const AllocationScope scope;
+    for (int r = 0; r < 20; ++r) ASSERT_TRUE((*e)->run());
+    EXPECT_EQ(scope.count(), 0u);
+    ++checked;
+  }
+  EXPECT_GE(checked, 1);
+}
+
+TEST(Int8DwConv, LoaderRefusesBadParameters) {
+  expect_refused(
+      [](ModelBuilder& b) {
+        int8_dw(b);
+        b.set_param(b.op_index("dw"), 8, 300);
+      },
+      "input zero point 300 out of range [0, 255]");
+  expect_refused(
+      [](ModelBuilder& b) {
+        int8_dw(b);
+        b.set_param(b.op_index("dw"), 7, ModelBuilder::f32_bits(-0.1f));
+      },
+      "input quantisation scale -0.1");
+  expect_refused(
+      [](ModelBuilder& b) {
+        int8_dw(b);
+        b.set_quant(b.tensor_index("dw.w.int8"), 0, 0, b.tensor_index("proj.w.qscale"));
+      },
+      "must be an f32 constant of one value per channel (3, or 8 for depthwise weights)");
 }
 
 }  // namespace
