@@ -59,6 +59,7 @@ struct Compared {
   std::unique_ptr<Engine> engine;
   std::vector<double> pos_err, rot_err, pos_dev, rot_dev;
   size_t flagged = 0;
+  size_t not_compared = 0;  // frames either model flagged
 };
 
 bool same_input(const ModelMeta& a, const ModelMeta& b) {
@@ -171,8 +172,14 @@ int cmd_eval(int argc, char** argv) {
       if (!q.valid()) ++cmp.flagged;
       cmp.pos_err.push_back(distance(q.position, frame.info.truth_position));
       cmp.rot_err.push_back(quat_angle_deg(q.orientation, frame.info.truth_orientation));
-      cmp.pos_dev.push_back(distance(q.position, p.position));
-      cmp.rot_dev.push_back(quat_angle_deg(q.orientation, p.orientation));
+      // A flagged estimate (e.g. a quaternion norm outside the sanity range)
+      // has no meaningful orientation to compare; such frames are counted.
+      if (p.valid() && q.valid()) {
+        cmp.pos_dev.push_back(distance(q.position, p.position));
+        cmp.rot_dev.push_back(quat_angle_deg(q.orientation, p.orientation));
+      } else {
+        ++cmp.not_compared;
+      }
     }
     if (csv) {
       const FrameInfo& f = frame.info;
@@ -202,10 +209,12 @@ int cmd_eval(int argc, char** argv) {
           ", \"compare\": {\"model\": \"%s\", \"flagged\": %zu, \"position_m\": {\"median\": "
           "%.4f, \"mean\": %.4f, \"p90\": %.4f, \"max\": %.4f}, \"orientation_deg\": "
           "{\"median\": %.4f, \"mean\": %.4f, \"p90\": %.4f, \"max\": %.4f}, "
-          "\"deviation_position_m\": {\"p50\": %.5f, \"p99\": %.5f, \"max\": %.5f}, "
+          "\"compared_frames\": %zu, \"deviation_position_m\": {\"p50\": %.5f, \"p99\": %.5f, "
+          "\"max\": %.5f}, "
           "\"deviation_orientation_deg\": {\"p50\": %.5f, \"p99\": %.5f, \"max\": %.5f}}",
           compare_path, cmp.flagged, cps.median, cps.mean, cps.p90, cps.max, cos.median, cos.mean,
-          cos.p90, cos.max, dps.median, dps.p99, dps.max, dos.median, dos.p99, dos.max);
+          cos.p90, cos.max, cmp.pos_dev.size(), dps.median, dps.p99, dps.max, dos.median, dos.p99,
+          dos.max);
     }
     std::printf("}\n");
   } else {
@@ -223,7 +232,9 @@ int cmd_eval(int argc, char** argv) {
                   cps.mean, cps.p90, cps.max);
       std::printf("orientation  median %.2f deg  mean %.2f deg  p90 %.2f deg  max %.2f deg\n",
                   cos.median, cos.mean, cos.p90, cos.max);
-      std::printf("deviation    position p50 %.4f  p99 %.4f  max %.4f m\n", dps.median, dps.p99,
+      std::printf("deviation    %zu frames both unflagged (%zu left out)\n", cmp.pos_dev.size(),
+                  cmp.not_compared);
+      std::printf("             position p50 %.4f  p99 %.4f  max %.4f m\n", dps.median, dps.p99,
                   dps.max);
       std::printf("             orientation p50 %.4f  p99 %.4f  max %.4f deg\n", dos.median,
                   dos.p99, dos.max);

@@ -11,11 +11,11 @@
    `percentile` (the p-th percentile of |values| at either end) or `mse` (the
    clipping range that minimises the quantisation error of the collected
    values). Weights: int8, symmetric, per output channel (max |w| / 127).
-3. Policy: LINEAR ops of more than one row outside the backbone (the input
-   projections, the transformers' projections and feed-forward layers) become
-   int8; everything else -- the backbone (found from the graph: whatever leads
-   to a depthwise convolution or squeeze-excite, and the 1x1 convolutions right
-   after one; `--backbone` makes its 1x1 and depthwise convolutions int8 too,
+3. Policy: LINEAR ops of more than one row outside the backbone (the
+   transformers' projections and feed-forward layers) become int8; everything
+   else -- the backbone (found from the graph: whatever leads to a depthwise
+   convolution or squeeze-excite, the 1x1 convolutions right after one, and the
+   input projections reading its feature maps; `--backbone` makes its 1x1 and depthwise convolutions int8 too,
    at a measured accuracy cost, see docs/int8.md), LayerNorm, attention, GELU, the single-row decoder and the
    pose heads -- stays fp32. `--fp32-ops REGEX` keeps more ops in fp32 by name. The policy is written into the file as the
    int8 dtype of each chosen op's weights, and described in the 'quantization'
@@ -186,7 +186,9 @@ def quantize_weights(w: np.ndarray):
 def backbone_ops(eg) -> set:
     """ids of the convolutional backbone's ops, found from the graph's structure:
     every op from which a depthwise convolution or squeeze-excite is reachable,
-    and the 1x1 convolutions (LINEAR) that read such an op's output directly."""
+    the 1x1 convolutions (LINEAR) that read such an op's output directly, and
+    the LINEAR ops reading the backbone's feature maps (the input projections:
+    measured to cost the most accuracy of the non-backbone ops, docs/int8.md)."""
     conv = (spec.OP_DWCONV2D, spec.OP_SQUEEZE_EXCITE)
     producer = {id(t): op for op in eg.ops for t in op.outputs}
     reach = set()
@@ -197,7 +199,9 @@ def backbone_ops(eg) -> set:
         src = producer.get(id(op.inputs[0]))
         if op.code == spec.OP_LINEAR and src is not None and src.code in conv:
             reach.add(id(op))
-    return reach
+    readers = [op for op in eg.ops if op.code == spec.OP_LINEAR and id(op) not in reach and
+               id(producer.get(id(op.inputs[0]))) in reach]
+    return reach | {id(op) for op in readers}
 
 
 def int8_candidates(eg, fp32_ops: str | None, backbone: bool = False) -> list:
@@ -324,7 +328,7 @@ def quantize_model(data: bytes, calibration: str, *, method: str = "percentile",
         method=method, percentile=percentile if method == "percentile" else None,
         calibration=os.path.basename(os.path.normpath(calibration)), frames=len(inputs),
         policy=("LINEAR of more than one row" + (", backbone 1x1 and depthwise included"
-                                                 if backbone else ", backbone fp32") +
+                                                 if backbone else ", backbone and input projections fp32") +
                 (f", fp32 by name: {fp32_ops}" if fp32_ops else "")),
         int8_ops=[r[0] for r in report.ops]), sort_keys=True)
     return serialise(eg, meta), report
