@@ -378,6 +378,22 @@ class ModelFileParser {
           m.config_json = reinterpret_cast<const char*>(v);
           m.config_json_bytes = len;
           break;
+        case MetaKey::kBev: {
+          if (!(st = expect(MetaType::kF32, 5, 5))) return st;
+          float b[5];
+          if (!(st = f32s(b, 5, "bev"))) return st;
+          APRT_ENSURE(b[0] > 0.0f && b[0] <= 10.0f, Errc::kBadMetadata,
+                      "model_bin: BEV cell size %g m (0 < cell <= 10)", double(b[0]));
+          APRT_ENSURE(b[4] >= 1.0f && b[4] <= 65536.0f, Errc::kBadMetadata,
+                      "model_bin: BEV clip count %g (1..65536)", double(b[4]));
+          m.has_bev = true;
+          m.bev_cell_m = b[0];
+          m.bev_x_min = b[1];
+          m.bev_y_min = b[2];
+          m.bev_height_threshold_m = b[3];
+          m.bev_clip_count = b[4];
+          break;
+        }
         case MetaKey::kQuantization:
           if (!(st = expect(MetaType::kStr, 0, 1u << 16))) return st;
           m.quantization = reinterpret_cast<const char*>(v);
@@ -405,6 +421,14 @@ class ModelFileParser {
     APRT_ENSURE(int(m.input_shape[3]) == m.norm_channels, Errc::kBadMetadata,
                 "model_bin: %d normalisation values for %u input channels", m.norm_channels,
                 m.input_shape[3]);
+    if (m.modality == format::Modality::kLidarBev) {
+      APRT_ENSURE(m.has_bev, Errc::kBadMetadata,
+                  "model_bin: a LiDAR BEV model needs metadata 'bev' (cell size, origin, height "
+                  "threshold, clip count)");
+      APRT_ENSURE(m.input_shape[1] == m.input_shape[2] && m.input_shape[3] == 2, Errc::kBadMetadata,
+                  "model_bin: a LiDAR BEV input is a square 2-channel grid, not %ux%ux%u",
+                  m.input_shape[1], m.input_shape[2], m.input_shape[3]);
+    }
     return ok();
   }
 

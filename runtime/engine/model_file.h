@@ -42,6 +42,11 @@ struct ModelMeta {
   // of each op's weights.
   const char* quantization = nullptr;
   size_t quantization_bytes = 0;
+  // LiDAR BEV models (modality 2): the histogram's geometry (docs/lidar.md);
+  // the grid is the input's H = W.
+  bool has_bev = false;
+  float bev_cell_m = 0.0f, bev_x_min = 0.0f, bev_y_min = 0.0f;
+  float bev_height_threshold_m = 0.0f, bev_clip_count = 0.0f;
 };
 
 struct TensorEntry {

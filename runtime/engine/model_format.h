@@ -82,6 +82,7 @@ enum class MetaKey : uint16_t {
   kValError = 40,
   kConfigJson = 41,
   kQuantization = 42,
+  kBev = 50,
 };
 
 enum class Modality : uint32_t { kImage = 1, kLidarBev = 2, kLidarPoints = 3 };

@@ -7,8 +7,9 @@ namespace aprt::ops {
 
 Status prepare_conv2d(OpNode& node);
 Status prepare_dwconv2d(OpNode& node);
-// DWCONV2D with int8 weights, after the shared shape checks of prepare_dwconv2d.
-Status prepare_qdwconv2d(OpNode& node, const kernels::Conv2dShape& shape, const Split& rows);
+// DWCONV2D with int8 weights, after the shared shape checks of prepare_dwconv2d
+// (by value: the caller's ConvState shares node.state with this op's state).
+Status prepare_qdwconv2d(OpNode& node, kernels::Conv2dShape shape, Split rows);
 Status prepare_linear(OpNode& node);
 Status prepare_qlinear(OpNode& node);  // LINEAR with int8 weights
 Status prepare_squeeze_excite(OpNode& node);

@@ -74,7 +74,8 @@ void pack_qdwconv(OpNode& node) {
 
 }  // namespace
 
-Status prepare_qdwconv2d(OpNode& node, const kernels::Conv2dShape& shape, const Split& rows) {
+// By value: the caller's copies live in node.state, which this overwrites.
+Status prepare_qdwconv2d(OpNode& node, kernels::Conv2dShape shape, Split rows) {
   const Tensor* w = node.in[1];
   const int C = shape.in_c;
   APRT_OP_ENSURE(node, w->is_const(), Errc::kBadTensor, "int8 weights '%s' must be a constant",

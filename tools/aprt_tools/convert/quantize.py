@@ -209,7 +209,7 @@ def int8_candidates(eg, fp32_ops: str | None, backbone: bool = False) -> list:
     skip = set() if backbone else backbone_ops(eg)
     out = []
     for op in eg.ops:
-        if op.inputs[1].dtype != spec.DTYPE_F32:
+        if op.inputs[1].dtype != spec.DTYPE_F32 or (keep and keep.search(op.name)):
             continue
         if op.code == spec.OP_DWCONV2D and backbone:
             out.append(op)
@@ -218,8 +218,6 @@ def int8_candidates(eg, fp32_ops: str | None, backbone: bool = False) -> list:
             continue
         rows = int(np.prod(op.inputs[0].shape[:-1]))
         if rows <= 1:  # single-row decoder and heads: no gain, only error
-            continue
-        if keep and keep.search(op.name):
             continue
         out.append(op)
     return out

@@ -75,6 +75,8 @@ META_KEYS = {
     40: (T_F32, "val_error"),  # median position error (m), orientation error (deg)
     41: (T_STR, "config_json"),
     42: (T_STR, "quantization"),  # JSON: method, calibration set, per-op policy
+    # LiDAR BEV (modality 2): cell_m, x_min, y_min, height_threshold_m, clip_count
+    50: (T_F32, "bev"),
 }
 META_BY_NAME = {name: (key, typ) for key, (typ, name) in META_KEYS.items()}
 META_REQUIRED = ("producer", "source_sha256", "modality", "input_shape", "norm_mean", "norm_std",
