@@ -55,11 +55,19 @@ int cmd_info(int argc, char** argv) {
   std::printf("\n");
   std::printf("modality     %s, input %ux%ux%ux%u (NHWC f32)\n", format::modality_name(m.modality),
               m.input_shape[0], m.input_shape[1], m.input_shape[2], m.input_shape[3]);
-  std::printf("normalise    mean (");
-  for (int c = 0; c < m.norm_channels; ++c) std::printf("%s%.4g", c ? ", " : "", m.norm_mean[c]);
-  std::printf(") std (");
-  for (int c = 0; c < m.norm_channels; ++c) std::printf("%s%.4g", c ? ", " : "", m.norm_std[c]);
-  std::printf("), %s\n", resize_text(m.resize_policy));
+  if (m.has_bev) {
+    std::printf(
+        "bev          %u x %u cells of %.4g m from (%.4g, %.4g) m, channel 1 at z >= %.4g m, "
+        "counts clipped at %.4g\n",
+        m.input_shape[1], m.input_shape[2], double(m.bev_cell_m), double(m.bev_x_min),
+        double(m.bev_y_min), double(m.bev_height_threshold_m), double(m.bev_clip_count));
+  } else {
+    std::printf("normalise    mean (");
+    for (int c = 0; c < m.norm_channels; ++c) std::printf("%s%.4g", c ? ", " : "", m.norm_mean[c]);
+    std::printf(") std (");
+    for (int c = 0; c < m.norm_channels; ++c) std::printf("%s%.4g", c ? ", " : "", m.norm_std[c]);
+    std::printf("), %s\n", resize_text(m.resize_policy));
+  }
   std::printf(
       "network      %s, d_model %u, %u heads, %u encoder + %u decoder layers, "
       "feed-forward %u\n",
@@ -72,6 +80,15 @@ int cmd_info(int argc, char** argv) {
                 m.val_error_orientation_deg);
   } else {
     std::printf("validation   no measured error in the file\n");
+  }
+  if (m.quantization) {
+    size_t int8_ops = 0;
+    for (size_t i = 0; i < e.op_count(); ++i) {
+      const OpNode& n = e.op(i);
+      if (n.n_in > 1 && n.in[1] && n.in[1]->dtype == format::DType::kI8) ++int8_ops;
+    }
+    std::printf("int8         %zu ops with int8 weights; %.*s\n", int8_ops,
+                int(m.quantization_bytes > 300 ? 300 : m.quantization_bytes), m.quantization);
   }
   int counts[format::kMaxOpCode + 1] = {};
   for (size_t i = 0; i < e.op_count(); ++i) counts[int(e.op(i).code)]++;

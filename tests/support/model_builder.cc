@@ -133,6 +133,7 @@ std::vector<uint8_t> ModelBuilder::build() const {
   meta_record(meta, 13, 2, stdev.data(), uint32_t(stdev.size() * 4));
   meta_record(meta, 20, 2, pose_min.data(), uint32_t(pose_min.size() * 4));
   meta_record(meta, 21, 2, pose_max.data(), uint32_t(pose_max.size() * 4));
+  if (!bev.empty()) meta_record(meta, 50, 2, bev.data(), uint32_t(bev.size() * 4));
   meta_record(meta, 31, 1, &d_model, 4);
   meta_record(meta, 32, 1, &nheads, 4);
   meta_record(meta, 33, 1, &enc_layers, 4);

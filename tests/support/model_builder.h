@@ -44,6 +44,7 @@ class ModelBuilder {
 
   // Metadata (sensible defaults; the input shape is taken from the input tensor).
   uint32_t modality = 1;
+  std::vector<float> bev;  // META 'bev' (cell, x_min, y_min, threshold, clip) when not empty
   std::vector<float> pose_min{0, 0, 0}, pose_max{10, 20, 5};
   uint32_t d_model = 16, nheads = 2, enc_layers = 1, dec_layers = 1;
   uint16_t version_major = format::kVersionMajor;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 
 #include "runtime/engine/engine.h"
@@ -151,6 +152,24 @@ TEST(ModelFile, RefusesMissingMetadata) {
   expect_error(heads, Errc::kBadMetadata, "multiple of nheads");
   auto modality = test::make_small_model([](ModelBuilder& m) { m.modality = 9; });
   expect_error(modality, Errc::kBadMetadata, "unknown modality");
+}
+
+TEST(ModelFile, RefusesInconsistentBevMetadata) {
+  auto none = test::make_small_model([](ModelBuilder& m) { m.modality = 2; });
+  expect_error(none, Errc::kBadMetadata, "needs metadata 'bev'");
+  auto rgb = test::make_small_model([](ModelBuilder& m) {
+    m.modality = 2;
+    m.bev = {0.125f, -16, -16, -1.4f, 5};
+  });
+  expect_error(rgb, Errc::kBadMetadata, "square 2-channel grid, not 8x8x3");
+  auto cell = test::make_small_model([](ModelBuilder& m) { m.bev = {0.0f, -16, -16, -1.4f, 5}; });
+  expect_error(cell, Errc::kBadMetadata, "BEV cell size 0 m");
+  auto clip = test::make_small_model([](ModelBuilder& m) { m.bev = {0.5f, -16, -16, -1.4f, 0}; });
+  expect_error(clip, Errc::kBadMetadata, "BEV clip count 0");
+  auto nan = test::make_small_model([](ModelBuilder& m) { m.bev = {0.5f, NAN, -16, -1.4f, 5}; });
+  expect_error(nan, Errc::kBadMetadata, "bev");
+  auto count = test::make_small_model([](ModelBuilder& m) { m.bev = {0.5f, -16, -16}; });
+  expect_error(count, Errc::kBadMetadata, "META key 50 has 12 bytes");
 }
 
 TEST(ModelFile, RefusesAbsurdShapes) {

@@ -1,5 +1,7 @@
 // The runtime's preprocessing against the Python training transform, for every
-// pixel format, and the table-driven kernel against the reference.
+// pixel format, and the table-driven kernel against the reference; LiDAR scans
+// through the reader, the point gate and both BEV kernels against the BEV
+// histogram the LiDAR model is trained with (aprt_tools/lidar_bev.py).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,10 +11,14 @@
 #include <string>
 #include <vector>
 
+#include "drivers/lidar/point_cloud.h"
+#include "drivers/lidar/scan_reader.h"
 #include "drivers/replay/image_decoder.h"
 #include "kernels/common/cpu_features.h"
 #include "kernels/common/kernel_set.h"
+#include "kernels/common/lidar_fast.h"
 #include "kernels/common/preprocess_image.h"
+#include "kernels/ref/lidar__ref.h"
 #include "kernels/ref/preprocess_image__ref.h"
 #include "runtime/common/allocation_counter.h"
 #include "tests/support/test_files.h"
@@ -101,6 +107,39 @@ TEST(Preprocess, DecodedPngMatchesTheTrainingTransform) {
   ASSERT_TRUE(kernels::plan_preprocess(imagenet(24), PixelFormat::kRgb24, 52, 30, plan.get()));
   kernels::preprocess_image(*plan, {rgb.data(), PixelFormat::kRgb24, 52, 30, 52 * 3}, got.data());
   for (size_t i = 0; i < want.size(); ++i) ASSERT_NEAR(got[i], want[i], 2e-5) << i;
+}
+
+TEST(Preprocess, BevHistogramMatchesTheTrainingTransform) {
+  const std::string dir = test::env_dir("APRT_PREPROCESS_DIR");
+  if (dir.empty()) GTEST_SKIP() << "APRT_PREPROCESS_DIR not set";
+  std::ifstream cases(dir + "/bev.txt");
+  ASSERT_TRUE(cases) << "bev.txt missing";
+  auto reader = ScanReader::create();
+  auto cloud = PointCloud::create(1 << 16);
+  ASSERT_TRUE(reader && cloud);
+  std::string line;
+  int checked = 0;
+  while (std::getline(cases, line)) {
+    std::istringstream f(line);
+    std::string name;
+    kernels::BevParams b{};
+    f >> name >> b.grid >> b.cell_m >> b.x_min >> b.y_min >> b.height_threshold_m >> b.clip_count;
+    ASSERT_TRUE(f) << line;
+    ASSERT_TRUE((*reader)->read((dir + "/" + name + ".bin").c_str(), PointRegion{}, cloud->get()));
+    const auto want = test::read_f32(dir + "/" + name + ".f32");
+    ASSERT_EQ(want.size(), size_t(b.grid) * b.grid * 2);
+    std::vector<float> ref(want.size()), fast(want.size());
+    std::vector<uint16_t> counts(want.size());
+    const PointCloud& pc = **cloud;
+    kernels::lidar_bev_histogram__ref(pc.points(), pc.size(), b, ref.data());
+    kernels::lidar_bev_histogram(pc.points(), pc.size(), b, counts.data(), fast.data());
+    for (size_t i = 0; i < want.size(); ++i) {
+      ASSERT_EQ(ref[i], want[i]) << name << " cell " << i / 2 << " channel " << i % 2;
+      ASSERT_EQ(fast[i], want[i]) << name << " cell " << i / 2 << " channel " << i % 2;
+    }
+    ++checked;
+  }
+  EXPECT_EQ(checked, 3);
 }
 
 TEST(Preprocess, DecoderRefusesCorruptFiles) {

@@ -151,7 +151,7 @@ def main(argv=None):
     sub = p.add_subparsers(dest="cmd", required=True)
 
     g = sub.add_parser("golden", help="write a varied-weight model, its ONNX, inputs and outputs")
-    g.add_argument("--config", default="tiny", choices=("tiny", "full"))
+    g.add_argument("--config", default="tiny", choices=("tiny", "full", "tiny-bev", "bev"))
     g.add_argument("--size", type=int, help="input side (default: the configuration's)")
     g.add_argument("--opset", type=int, default=13, choices=(13, 17))
     g.add_argument("--seed", type=int, default=1)
@@ -167,7 +167,7 @@ def main(argv=None):
     gi.set_defaults(fn=cmd_golden_int8)
 
     e = sub.add_parser("export", help="export the reference model (optionally a checkpoint)")
-    e.add_argument("--config", default="full", choices=("tiny", "full"))
+    e.add_argument("--config", default="full", choices=("tiny", "full", "tiny-bev", "bev"))
     e.add_argument("--config-json", help="configuration file written by export/train")
     e.add_argument("--size", type=int)
     e.add_argument("--weights", help="PyTorch checkpoint (upstream or ours), loaded strictly")

@@ -5,7 +5,10 @@ For each case: <case>.raw (the frame bytes), <case>.f32 (expected NHWC input
 tensor), and a line in cases.txt: "case format width height stride size".
 YUV frames are converted to RGB with the integer BT.601 formula of
 kernels/common/image_types.h before the transform, exactly as the runtime does.
-Also writes rgb.png, whose expected tensor is png.f32 (decoder + transform).
+Also writes rgb.png, whose expected tensor is png.f32 (decoder + transform),
+and LiDAR scans with the BEV histogram the training uses (lidar_bev.py):
+bev_<k>.bin (KITTI), bev_<k>.f32, and a line in bev.txt:
+"name grid cell_m x_min y_min height_threshold_m clip_count".
 """
 
 from __future__ import annotations
@@ -65,4 +68,33 @@ def write_cases(out: str, seed: int = 3):
     Image.fromarray(rgb).save(os.path.join(out, "rgb.png"))
     prepare(rgb, 24).permute(1, 2, 0).contiguous().numpy().astype("<f4").tofile(
         os.path.join(out, "png.f32"))
+    write_bev_cases(out, rng)
     return len(lines)
+
+
+def write_bev_cases(out: str, rng):
+    from .lidar_bev import bev_histogram
+
+    lines = []
+    for k, (grid, cell, x0, y0, thr, clip, n) in enumerate((
+            (16, 0.5, -4.0, -4.0, -1.0, 3.0, 2000),
+            (64, 0.125, -4.0, -3.0, 0.25, 5.0, 20000),
+            (33, 0.3, -6.0, -2.5, -1.4, 1.0, 500))):
+        pts = np.zeros((n, 4), np.float32)
+        pts[:, 0] = rng.uniform(x0 - 2, x0 + grid * cell + 2, n)
+        pts[:, 1] = rng.uniform(y0 - 2, y0 + grid * cell + 2, n)
+        pts[:, 2] = rng.uniform(-3, 3, n)
+        pts[:, 3] = rng.uniform(0, 1, n)
+        # Points exactly on cell edges and on the height threshold, and clusters
+        # that exceed the clip count.
+        m = n // 10
+        pts[:m, 0] = x0 + cell * rng.integers(0, grid, m)
+        pts[:m, 1] = y0 + cell * rng.integers(0, grid, m)
+        pts[m:2 * m, 2] = thr
+        pts[2 * m:3 * m, :2] = pts[3 * m, :2]
+        pts.tofile(os.path.join(out, f"bev_{k}.bin"))
+        bev = dict(cell_m=cell, x_min=x0, y_min=y0, height_threshold_m=thr, clip_count=clip)
+        bev_histogram(pts, grid, bev).astype("<f4").tofile(os.path.join(out, f"bev_{k}.f32"))
+        lines.append(f"bev_{k} {grid} {cell!r} {x0!r} {y0!r} {thr!r} {clip!r}")
+    with open(os.path.join(out, "bev.txt"), "w") as f:
+        f.write("\n".join(lines) + "\n")

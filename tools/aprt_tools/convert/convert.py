@@ -82,6 +82,10 @@ def build_meta(eg, source: bytes, source_name: str, config: dict | None, overrid
             if meta[k] != want:
                 raise UnsupportedOnnx(f"the graph has {k} = {meta[k]}, the configuration says "
                                       f"{want}: wrong configuration for this ONNX file?")
+        if config.get("bev"):
+            from ..lidar_bev import bev_meta
+
+            meta["bev"] = bev_meta(config["bev"])
         if "val_error" in config.get("extra", {}):
             meta["val_error"] = list(config["extra"]["val_error"])
     meta.setdefault("modality", spec.MODALITY_IMAGE)

@@ -320,13 +320,15 @@ def quantize_model(data: bytes, calibration: str, *, method: str = "percentile",
         report.ops.append((op.name, int(np.prod(op.inputs[0].shape[:-1])), k, n, scale, zero))
     eg.prune()
     report.deviation_m, report.deviation_deg = deviations()
+    # Insertion order: what `aprt info` shows first (method, data, policy), the op list last.
     meta["quantization"] = json.dumps(dict(
-        scheme="u8 activations per tensor (asymmetric), s8 weights per channel (symmetric), "
-               "int32 accumulation",
         method=method, percentile=percentile if method == "percentile" else None,
         calibration=os.path.basename(os.path.normpath(calibration)), frames=len(inputs),
         policy=("LINEAR of more than one row" + (", backbone 1x1 and depthwise included"
-                                                 if backbone else ", backbone and input projections fp32") +
+                                                 if backbone else
+                                                 ", backbone and input projections fp32") +
                 (f", fp32 by name: {fp32_ops}" if fp32_ops else "")),
-        int8_ops=[r[0] for r in report.ops]), sort_keys=True)
+        scheme="u8 activations per tensor (asymmetric), s8 weights per channel (symmetric), "
+               "int32 accumulation",
+        int8_ops=[r[0] for r in report.ops]))
     return serialise(eg, meta), report

@@ -43,20 +43,36 @@ class AprConfig:
     # Training-set position bounds for min-max normalisation (metres).
     pose_min: tuple = (0.0, 0.0, 0.0)
     pose_max: tuple = (1.0, 1.0, 1.0)
+    # LiDAR BEV models (in_channels 2): the histogram's geometry, keys of
+    # lidar_bev.BEV_KEYS; the grid is image_size. None for camera models.
+    bev: dict | None = None
     extra: dict = field(default_factory=dict)
 
     @staticmethod
     def named(name: str, image_size: int | None = None) -> "AprConfig":
-        """Preset configurations: 'full' (upstream DeepLoc) and 'tiny' (tests)."""
-        if name == "full":
+        """Preset configurations: 'full' (upstream DeepLoc) and 'tiny' (tests);
+        'bev' and 'tiny-bev' are the same networks on the LiDAR BEV histogram
+        (DESIGN.md 4.2: 2 channels; 256 x 256 cells of 0.125 m, TransFuser's
+        32 m square centred on the sensor, split 0.5 m above the ground for a
+        sensor 1.9 m up, counts clipped at 5)."""
+        bev = name.endswith("bev")
+        base = {"bev": "full", "tiny-bev": "tiny"}.get(name, name)
+        if base == "full":
             cfg = AprConfig()
-        elif name == "tiny":
+        elif base == "tiny":
             # Same trunk, a transformer small enough for second-long tests;
             # matches the upstream tiny sample in tests/golden/upstream.
             cfg = AprConfig(hidden_dim=32, nheads=8, dim_feedforward=32, enc_layers=1,
                             dec_layers=1, image_size=64)
         else:
-            raise ValueError(f"unknown configuration {name!r} (full, tiny)")
+            raise ValueError(f"unknown configuration {name!r} (full, tiny, bev, tiny-bev)")
+        if bev:
+            grid = 256 if base == "full" else 64
+            cell = 32.0 / grid
+            cfg.image_size, cfg.in_channels = grid, 2
+            cfg.mean, cfg.std = (0.0, 0.0), (1.0, 1.0)  # histogram values are in [0, 1]
+            cfg.bev = dict(cell_m=cell, x_min=-16.0, y_min=-16.0, height_threshold_m=-1.4,
+                           clip_count=5.0)
         if image_size is not None:
             cfg.image_size = image_size
         return cfg
