@@ -17,39 +17,7 @@ Expected<std::unique_ptr<DeeplocReplay>> DeeplocReplay::open(const char* folder)
   std::snprintf(r->folder_, sizeof r->folder_, "%s", folder);
   char path[768];
   std::snprintf(path, sizeof path, "%s/poses.txt", folder);
-  FILE* f = std::fopen(path, "r");
-  APRT_ENSURE(f != nullptr, Errc::kIo, "replay: cannot open %s: %s", path, std::strerror(errno));
-  char line[512];
-  int lineno = 0;
-  while (std::fgets(line, sizeof line, f)) {
-    ++lineno;
-    char* s = line;
-    while (*s == ' ' || *s == '\t') ++s;
-    if (*s == '#' || *s == '\n' || *s == '\r' || *s == '\0') continue;
-    ReplayEntry e;
-    double v[7];
-    int used = 0;
-    const int n = std::sscanf(s, "%127s %lf %lf %lf %lf %lf %lf %lf %n", e.name, &v[0], &v[1],
-                              &v[2], &v[3], &v[4], &v[5], &v[6], &used);
-    bool finite = n == 8;
-    for (int k = 0; finite && k < 7; ++k) finite = std::isfinite(v[k]);
-    if (!finite) {
-      std::fclose(f);
-      return Error(Errc::kBadMetadata,
-                   "replay: %s:%d: expected 'name x y z qw qx qy qz' with finite numbers", path,
-                   lineno);
-    }
-    const double qn = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
-    if (!(qn > 1e-9)) {
-      std::fclose(f);
-      return Error(Errc::kBadMetadata, "replay: %s:%d: zero quaternion", path, lineno);
-    }
-    for (int k = 0; k < 3; ++k) e.position[k] = v[k];
-    for (int k = 0; k < 4; ++k) e.orientation[k] = v[3 + k] / qn;
-    r->entries_.push_back(e);
-  }
-  std::fclose(f);
-  APRT_ENSURE(!r->entries_.empty(), Errc::kBadMetadata, "replay: %s lists no frames", path);
+  if (Status st = read_pose_list(path, &r->entries_); !st) return st.error();
   // Optional recorded times.
   std::snprintf(path, sizeof path, "%s/times.txt", folder);
   if (FILE* t = std::fopen(path, "r")) {

@@ -12,16 +12,10 @@
 
 #include "drivers/frame/frame.h"
 #include "drivers/replay/image_decoder.h"
+#include "drivers/replay/pose_list.h"
 #include "runtime/common/expected.h"
 
 namespace aprt {
-
-struct ReplayEntry {
-  char name[128] = {};
-  double position[3] = {};
-  double orientation[4] = {1, 0, 0, 0};
-  double time_s = -1.0;  // from times.txt, or -1
-};
 
 class DeeplocReplay {
  public:

@@ -1,8 +1,9 @@
 // aprt eval --model MODEL --data DIR [--compare MODEL2] [--csv FILE] [--json] [--threads N]
 //           [--isa X] [--limit N]
 //
-// Runs the model on every frame of a labelled sequence (DeepLoc layout) and
-// reports position and orientation errors: median, mean, p90, max; per-frame
+// Runs the model on every frame of a labelled sequence -- camera (DeepLoc
+// layout) or, for a LiDAR BEV model, scans (lidar_poses.txt + KITTI/PCD) --
+// and reports position and orientation errors: median, mean, p90, max; per-frame
 // rows with --csv (plot them with `python3 -m aprt_tools plot-eval`). With
 // --compare (e.g. the int8 model beside its fp32 source) the second model runs
 // on the same preprocessed input: its errors side by side, and the per-frame
@@ -13,14 +14,11 @@
 #include <memory>
 #include <vector>
 
-#include "drivers/frame/frame.h"
-#include "drivers/replay/deeploc_replay.h"
-#include "kernels/common/preprocess_image.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
+#include "runtime/cli/eval_inputs.h"
 #include "runtime/cli/load_model.h"
 #include "runtime/engine/engine.h"
-#include "runtime/engine/model_input.h"
 #include "runtime/pose/pose_decode.h"
 
 namespace aprt::cli {
@@ -63,7 +61,11 @@ struct Compared {
 };
 
 bool same_input(const ModelMeta& a, const ModelMeta& b) {
-  bool same = a.resize_policy == b.resize_policy && a.norm_channels == b.norm_channels;
+  bool same = a.modality == b.modality && a.resize_policy == b.resize_policy &&
+              a.norm_channels == b.norm_channels;
+  same = same && a.bev_cell_m == b.bev_cell_m && a.bev_x_min == b.bev_x_min &&
+         a.bev_y_min == b.bev_y_min && a.bev_height_threshold_m == b.bev_height_threshold_m &&
+         a.bev_clip_count == b.bev_clip_count;
   for (int d = 0; d < 4; ++d) same = same && a.input_shape[d] == b.input_shape[d];
   for (int c = 0; c < a.norm_channels && same; ++c)
     same = a.norm_mean[c] == b.norm_mean[c] && a.norm_std[c] == b.norm_std[c];
@@ -77,6 +79,8 @@ int cmd_eval(int argc, char** argv) {
   if (args.flag("--help")) {
     std::printf(
         "usage: aprt eval --model MODEL --data DIR [options]\n"
+        "  DIR           camera: poses.txt + images (DeepLoc layout); LiDAR BEV model:\n"
+        "                lidar_poses.txt + scans (KITTI .bin or PCD), as aprt_synth --lidar\n"
         "  --csv FILE    per-frame predictions, truth and errors\n"
         "  --json        summary as one JSON object\n"
         "  --compare M2  also run model M2 (e.g. its int8 version) on the same input:\n"
@@ -97,40 +101,24 @@ int cmd_eval(int argc, char** argv) {
     std::fprintf(stderr, "aprt eval: usage: aprt eval --model MODEL --data DIR [--csv FILE]\n");
     return 2;
   }
-  std::unique_ptr<Engine> engine = load_image_model("eval", model_path, int(threads), isa);
+  std::unique_ptr<Engine> engine = load_model("eval", model_path, int(threads), isa);
   if (!engine) return 2;
   Engine& e = *engine;
   Compared cmp;
   if (compare_path) {
-    cmp.engine = load_image_model("eval", compare_path, int(threads), isa);
+    cmp.engine = load_model("eval", compare_path, int(threads), isa);
     if (!cmp.engine) return 2;
     if (!same_input(e.meta(), cmp.engine->meta())) {
       std::fprintf(stderr,
-                   "aprt eval: %s and %s take different inputs (shape, resize or "
+                   "aprt eval: %s and %s take different inputs (modality, shape, resize or "
                    "normalisation): nothing to compare frame by frame\n",
                    model_path, compare_path);
       return 2;
     }
   }
-  auto replay = DeeplocReplay::open(data);
-  if (!replay) {
-    std::fprintf(stderr, "aprt eval: %s\n", replay.error().message());
-    return 2;
-  }
-  DeeplocReplay& r = *replay.value();
+  std::unique_ptr<EvalInputs> inputs = open_eval_inputs(data, e);
+  if (!inputs) return 2;
   const ModelMeta& m = e.meta();
-  const kernels::PreprocessParams pp = preprocess_params(m);
-  auto plan = std::make_unique<kernels::PreprocessPlan>();
-  if (!kernels::plan_preprocess(pp, kernels::PixelFormat::kRgb24, r.width(), r.height(), plan.get(),
-                                e.kernel_set() ? e.kernel_set()->preprocess : nullptr)) {
-    std::fprintf(stderr, "aprt eval: cannot map %dx%d frames to the %dx%d input\n", r.width(),
-                 r.height(), pp.size, pp.size);
-    return 2;
-  }
-  std::vector<uint8_t> pixels(r.frame_bytes());
-  FrameBuffer frame;
-  frame.data = pixels.data();
-  frame.capacity = pixels.size();
   FILE* csv = nullptr;
   if (csv_path) {
     csv = std::fopen(csv_path, "w");
@@ -142,27 +130,24 @@ int cmd_eval(int argc, char** argv) {
                  "name,x,y,z,qw,qx,qy,qz,gt_x,gt_y,gt_z,gt_qw,gt_qx,gt_qy,gt_qz,"
                  "position_error_m,orientation_error_deg,flags\n");
   }
-  const size_t n = limit > 0 ? std::min(size_t(limit), r.size()) : r.size();
+  const size_t n = limit > 0 ? std::min(size_t(limit), inputs->size()) : inputs->size();
   std::vector<double> pos_err, rot_err;
   size_t bad_frames = 0, flagged = 0;
   for (size_t i = 0; i < n; ++i) {
-    if (Status s = r.read(i, &frame, i, 0); !s) {
-      std::fprintf(stderr, "aprt eval: frame %zu skipped: %s\n", i, s.error().message());
+    EvalFrame f;
+    const char* why = "";
+    if (!inputs->fill(i, e.input().f32(), &f, &why)) {
+      std::fprintf(stderr, "aprt eval: frame %zu skipped: %s\n", i, why);
       ++bad_frames;
       continue;
     }
-    kernels::preprocess_image(*plan, frame.view(), e.input().f32());
     // The input's buffer is reused by later activations: copy it before run().
     if (cmp.engine) std::copy_n(e.input().f32(), e.input().numel, cmp.engine->input().f32());
     (void)e.run();
     const PoseEstimate p = decode_pose(e.output().f32(), m);
     if (!p.valid()) ++flagged;
-    double pe = 0;
-    for (int k = 0; k < 3; ++k)
-      pe += (p.position[k] - frame.info.truth_position[k]) *
-            (p.position[k] - frame.info.truth_position[k]);
-    pe = std::sqrt(pe);
-    const double oe = quat_angle_deg(p.orientation, frame.info.truth_orientation);
+    const double pe = distance(p.position, f.position);
+    const double oe = quat_angle_deg(p.orientation, f.orientation);
     pos_err.push_back(pe);
     rot_err.push_back(oe);
     if (cmp.engine) {
@@ -170,8 +155,8 @@ int cmd_eval(int argc, char** argv) {
       (void)c.run();
       const PoseEstimate q = decode_pose(c.output().f32(), c.meta());
       if (!q.valid()) ++cmp.flagged;
-      cmp.pos_err.push_back(distance(q.position, frame.info.truth_position));
-      cmp.rot_err.push_back(quat_angle_deg(q.orientation, frame.info.truth_orientation));
+      cmp.pos_err.push_back(distance(q.position, f.position));
+      cmp.rot_err.push_back(quat_angle_deg(q.orientation, f.orientation));
       // A flagged estimate (e.g. a quaternion norm outside the sanity range)
       // has no meaningful orientation to compare; such frames are counted.
       if (p.valid() && q.valid()) {
@@ -182,14 +167,12 @@ int cmd_eval(int argc, char** argv) {
       }
     }
     if (csv) {
-      const FrameInfo& f = frame.info;
       std::fprintf(
           csv,
           "%s,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%u\n",
           f.name, p.position[0], p.position[1], p.position[2], p.orientation[0], p.orientation[1],
-          p.orientation[2], p.orientation[3], f.truth_position[0], f.truth_position[1],
-          f.truth_position[2], f.truth_orientation[0], f.truth_orientation[1],
-          f.truth_orientation[2], f.truth_orientation[3], pe, oe, p.flags);
+          p.orientation[2], p.orientation[3], f.position[0], f.position[1], f.position[2],
+          f.orientation[0], f.orientation[1], f.orientation[2], f.orientation[3], pe, oe, p.flags);
     }
   }
   if (csv) std::fclose(csv);

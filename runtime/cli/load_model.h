@@ -1,4 +1,4 @@
-// The image model of an offline command (eval, infer), loaded with the
+// The model of an offline command (eval, infer), loaded with the
 // command's --threads/--isa; on failure the reason is printed as "aprt CMD: ...".
 #pragma once
 
@@ -10,5 +10,9 @@ namespace aprt::cli {
 
 std::unique_ptr<Engine> load_image_model(const char* command, const char* path, int threads,
                                          const char* isa);
+
+// Any modality (0) or the one given.
+std::unique_ptr<Engine> load_model(const char* command, const char* path, int threads,
+                                   const char* isa, uint32_t modality = 0);
 
 }  // namespace aprt::cli

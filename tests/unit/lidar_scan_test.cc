@@ -1,16 +1,19 @@
 // LiDAR scans from files (drivers/lidar): KITTI .bin and PCD (ascii and
 // binary, fields in any order, other fields beside them), through the point
 // gate -- NaN/Inf dropped, absurd values clipped, the count bounded -- and
-// files that lie about themselves refused with the reason.
+// files that lie about themselves refused with the reason; labelled sequences
+// (lidar_poses.txt naming scans).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
 
+#include "drivers/lidar/lidar_sequence.h"
 #include "drivers/lidar/scan_reader.h"
 
 namespace aprt {
@@ -133,6 +136,44 @@ TEST(LidarScan, PcdThatCannotBeRead) {
   ASSERT_FALSE(s);
   EXPECT_NE(std::strstr(s.error().message(), "neither .bin"), nullptr);
   EXPECT_FALSE(f.reader->read("/nonexistent/scan.bin", f.region, f.cloud.get()));
+}
+
+TEST(LidarSequence, ReadsPosesAndScansAndNamesBadOnes) {
+  const std::string dir = temp("/lidar_seq");
+  std::filesystem::create_directories(dir + "/lidar");
+  const float pts[] = {1, 2, 3, 0, 4, 5, 6, 1};
+  write_bytes(dir + "/lidar/a.bin", pts, sizeof pts);
+  write_bytes(dir + "/lidar/short.bin", pts, 10);  // not a whole point
+  std::ofstream(dir + "/lidar_poses.txt") << "# name x y z qw qx qy qz\n"
+                                          << "lidar/a.bin 1 2 1.9 2 0 0 0\n"
+                                          << "lidar/short.bin 3 4 1.9 1 0 0 0\n"
+                                          << "lidar/missing.bin 5 6 1.9 1 0 0 0\n";
+  auto seq = LidarSequence::open(dir.c_str());
+  ASSERT_TRUE(seq) << seq.error().message();
+  LidarSequence& s = **seq;
+  ASSERT_EQ(s.size(), 3u);
+  EXPECT_EQ(s.entry(0).position[1], 2.0);
+  EXPECT_EQ(s.entry(0).orientation[0], 1.0);  // normalised
+  auto cloud = PointCloud::create(16);
+  ASSERT_TRUE(cloud);
+  ASSERT_TRUE(s.read(0, PointRegion{}, cloud->get()));
+  EXPECT_EQ((*cloud)->size(), 2u);
+  auto bad = s.read(1, PointRegion{}, cloud->get());
+  ASSERT_FALSE(bad);
+  EXPECT_NE(std::strstr(bad.error().message(), "short.bin"), nullptr) << bad.error().message();
+  auto gone = s.read(2, PointRegion{}, cloud->get());
+  ASSERT_FALSE(gone);
+  EXPECT_NE(std::strstr(gone.error().message(), "missing.bin"), nullptr);
+  EXPECT_FALSE(s.read(3, PointRegion{}, cloud->get()));
+
+  std::ofstream(dir + "/lidar_poses.txt") << "lidar/a.bin 1 2 nope 1 0 0 0\n";
+  auto malformed = LidarSequence::open(dir.c_str());
+  ASSERT_FALSE(malformed);
+  EXPECT_NE(std::strstr(malformed.error().message(), "lidar_poses.txt:1"), nullptr)
+      << malformed.error().message();
+  auto none = LidarSequence::open(temp("/no_such_sequence").c_str());
+  ASSERT_FALSE(none);
+  EXPECT_NE(std::strstr(none.error().message(), "lidar_poses.txt"), nullptr);
 }
 
 }  // namespace

@@ -109,7 +109,8 @@ def cmd_train(a):
     from .train import train
 
     model, cfg = train(a.data, a.out, size=a.size, minutes=a.minutes, batch=a.batch, lr=a.lr,
-                       seed=a.seed, threads=a.threads, hidden=a.hidden, layers=a.layers)
+                       seed=a.seed, threads=a.threads, hidden=a.hidden, layers=a.layers,
+                       modality=a.modality)
     model.eval()
     with open(f"{a.out}/model.onnx", "wb") as f:
         f.write(export_onnx(model, 13))
@@ -214,6 +215,8 @@ def main(argv=None):
     t.add_argument("--threads", type=int, default=2)
     t.add_argument("--hidden", type=int, default=128, help="transformer width (d_model)")
     t.add_argument("--layers", type=int, default=3, help="encoder and decoder layers per branch")
+    t.add_argument("--modality", default="image", choices=("image", "bev"),
+                   help="bev: LiDAR scans (lidar_poses.txt) as BEV histograms, grid --size")
     t.set_defaults(fn=cmd_train)
 
     pe = sub.add_parser("plot-eval", help="trajectory and error plot from `aprt eval --csv` files")

@@ -10,9 +10,10 @@ import numpy as np
 from PIL import Image
 
 
-def read_poses(folder: str):
-    """[(name, position[3], quaternion wxyz[4])], in file order."""
-    path = os.path.join(folder, "poses.txt")
+def read_poses(folder: str, filename: str = "poses.txt"):
+    """[(name, position[3], quaternion wxyz[4])], in file order (lidar_poses.txt for
+    LiDAR sequences)."""
+    path = os.path.join(folder, filename)
     out = []
     with open(path) as f:
         for n, line in enumerate(f, 1):

@@ -28,7 +28,9 @@ def crop_resize(rgb: np.ndarray, size: int) -> torch.Tensor:
     return x[0]
 
 
-def normalise(x: torch.Tensor, mean=IMAGENET_MEAN, std=IMAGENET_STD) -> torch.Tensor:
+def normalise(x: torch.Tensor, mean=None, std=None) -> torch.Tensor:
+    mean = IMAGENET_MEAN if mean is None else mean
+    std = IMAGENET_STD if std is None else std
     m = torch.tensor(mean, dtype=x.dtype).view(-1, 1, 1)
     s = torch.tensor(std, dtype=x.dtype).view(-1, 1, 1)
     return (x - m) / s

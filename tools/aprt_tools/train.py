@@ -63,6 +63,22 @@ def load_sequence(folder: str, size: int):
     return imgs, pos, quat
 
 
+def load_lidar_sequence(folder: str, grid: int, bev: dict):
+    """LiDAR scans (lidar_poses.txt + KITTI .bin) as BEV histograms stored like
+    images: uint8 = round(255 * value); the clip counts used here (1..255
+    dividing 255 or not) come back as value = round(255 k / clip) / 255."""
+    from .lidar_bev import bev_histogram, read_kitti
+
+    poses = read_poses(folder, "lidar_poses.txt")
+    imgs = torch.empty((len(poses), 2, grid, grid), dtype=torch.uint8)
+    for i, (name, _, _) in enumerate(poses):
+        h = bev_histogram(read_kitti(os.path.join(folder, name)), grid, bev)
+        imgs[i] = torch.from_numpy(np.rint(h * 255.0).astype(np.uint8)).permute(2, 0, 1)
+    pos = torch.tensor(np.stack([p for _, p, _ in poses]), dtype=torch.float32)
+    quat = torch.tensor(np.stack([q / np.linalg.norm(q) for _, _, q in poses]), dtype=torch.float32)
+    return imgs, pos, quat
+
+
 def augment(x: torch.Tensor, gen: torch.Generator, strength: float = 1.0) -> torch.Tensor:
     """x: (N, 3, S, S) in [0, 1]; lighting and sensor changes, never geometry.
 
@@ -95,11 +111,11 @@ def split_holdout(n: int, fraction: float = 0.1):
 
 
 @torch.no_grad()
-def evaluate(model, imgs, pos, quat, lo, hi, batch=32):
+def evaluate(model, imgs, pos, quat, lo, hi, batch=32, mean=None, std=None):
     model.eval()
     pe, oe = [], []
     for i in range(0, len(imgs), batch):
-        x = normalise(imgs[i:i + batch].float() / 255.0)
+        x = normalise(imgs[i:i + batch].float() / 255.0, mean, std)
         y = model(x)
         p = y[:, :3] * (hi - lo) + lo
         for k in range(len(p)):
@@ -111,18 +127,24 @@ def evaluate(model, imgs, pos, quat, lo, hi, batch=32):
 
 def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: int = 16,
           lr: float = 1e-4, seed: int = 1, threads: int = 2, hidden: int = 128, layers: int = 3,
-          warmup_steps: int = 200, log=print):
+          warmup_steps: int = 200, modality: str = "image", log=print):
+    """modality "image": DATA's poses.txt + images at size x size; "bev": its
+    lidar_poses.txt + scans as size x size BEV histograms over 32 m (the 'bev'
+    configuration's geometry at that grid), without augmentation."""
     torch.manual_seed(seed)
     torch.set_num_threads(threads)
     os.makedirs(out, exist_ok=True)
     t0 = time.time()
-    imgs, pos, quat = load_sequence(data, size)
+    cfg = AprConfig.named("bev" if modality == "bev" else "full", size)
+    if modality == "bev":
+        imgs, pos, quat = load_lidar_sequence(data, size, cfg.bev)
+    else:
+        imgs, pos, quat = load_sequence(data, size)
     log(f"train: {len(imgs)} frames from {data} loaded in {time.time() - t0:.0f} s")
     tr, va = split_holdout(len(imgs))
     lo = pos[tr].min(dim=0).values
     hi = pos[tr].max(dim=0).values
     hi = torch.maximum(hi, lo + 1.0)  # a flat axis (camera height) still gets a unit range
-    cfg = AprConfig.named("full", size)
     cfg.hidden_dim, cfg.dim_feedforward = hidden, 2 * hidden
     cfg.enc_layers = cfg.dec_layers = layers
     cfg.dropout = 0.0  # the augmentation regularises; dropout slowed the start further
@@ -156,8 +178,8 @@ def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: in
             # before it can learn invariance to lighting), augmentation ramped
             # in from 30 % to 70 % of the budget. With full augmentation from the
             # start the position stayed at the mean for 10+ CPU-minutes.
-            strength = min(1.0, max(0.0, (frac - 0.3) / 0.4))
-            x = normalise(augment(imgs[idx].float() / 255.0, gen, strength))
+            strength = min(1.0, max(0.0, (frac - 0.3) / 0.4)) if modality == "image" else 0.0
+            x = normalise(augment(imgs[idx].float() / 255.0, gen, strength), cfg.mean, cfg.std)
             loss, lp, lq = loss_fn(model(x), pos_n[idx], quat[idx])
             opt.zero_grad()
             loss.backward()
@@ -168,7 +190,7 @@ def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: in
                 log(f"train: epoch {epoch} step {step} loss {loss.item():.3f} pos {lp.item():.4f} "
                     f"quat {lq.item():.4f} s_x {loss_fn.s_x.item():.2f} s_q {loss_fn.s_q.item():.2f} "
                     f"{(time.time() - start) / 60:.1f} min")
-        pe, oe = evaluate(model, imgs[va], pos[va], quat[va], lo, hi)
+        pe, oe = evaluate(model, imgs[va], pos[va], quat[va], lo, hi, mean=cfg.mean, std=cfg.std)
         row = dict(epoch=epoch, step=step, minutes=(time.time() - start) / 60,
                    val_pos_median=float(np.median(pe)), val_rot_median=float(np.median(oe)))
         log_rows.append(row)

@@ -66,15 +66,14 @@ class AprConfig:
                             dec_layers=1, image_size=64)
         else:
             raise ValueError(f"unknown configuration {name!r} (full, tiny, bev, tiny-bev)")
-        if bev:
-            grid = 256 if base == "full" else 64
-            cell = 32.0 / grid
-            cfg.image_size, cfg.in_channels = grid, 2
-            cfg.mean, cfg.std = (0.0, 0.0), (1.0, 1.0)  # histogram values are in [0, 1]
-            cfg.bev = dict(cell_m=cell, x_min=-16.0, y_min=-16.0, height_threshold_m=-1.4,
-                           clip_count=5.0)
         if image_size is not None:
             cfg.image_size = image_size
+        if bev:  # the grid is the input side; it always spans 32 m
+            cfg.image_size = image_size or (256 if base == "full" else 64)
+            cfg.in_channels = 2
+            cfg.mean, cfg.std = (0.0, 0.0), (1.0, 1.0)  # histogram values are in [0, 1]
+            cfg.bev = dict(cell_m=32.0 / cfg.image_size, x_min=-16.0, y_min=-16.0,
+                           height_threshold_m=-1.4, clip_count=5.0)
         return cfg
 
     def to_json(self) -> str:
