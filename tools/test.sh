@@ -3,7 +3,7 @@
 #   tools/test.sh            the default run: format check, then every test except
 #                            the slow suites, on the ASan+UBSan build (~1 minute)
 #   tools/test.sh --slow     full-size golden models (224 and 128) on the release build
-#   tools/test.sh --fuzz N   the model-file fuzzer for N seconds (clang, libFuzzer)
+#   tools/test.sh --fuzz N   the model-file fuzzer for N seconds, the PointCloud2 one N/2 (clang, libFuzzer)
 #   tools/test.sh --tsan     the threaded engine and the supervised loop under ThreadSanitizer
 #   tools/test.sh --aarch64  cross build for aarch64; unit, kernel and tiny golden
 #                            tests under qemu-aarch64 as Cortex-A72 (no dotprod)
@@ -33,12 +33,16 @@ case "${1:-}" in
   --fuzz)
     seconds="${2:-60}"
     cmake --preset fuzz >/dev/null
-    cmake --build --preset fuzz -j "$jobs" --target model_file_fuzz write_seed
+    cmake --build --preset fuzz -j "$jobs" --target model_file_fuzz write_seed pointcloud2_fuzz
     corpus=build/fuzz/corpus
     mkdir -p "$corpus"
     build/fuzz/bin/write_seed "$corpus"
     build/fuzz/bin/model_file_fuzz -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
       -print_final_stats=1 "$corpus"
+    # The PointCloud2 decoder: half the time again (its inputs are small).
+    mkdir -p build/fuzz/corpus_pc2
+    build/fuzz/bin/pointcloud2_fuzz -max_total_time="$((seconds / 2))" -timeout=10 \
+      -rss_limit_mb=4096 -print_final_stats=1 build/fuzz/corpus_pc2
     ;;
   --tsan)
     cmake --preset tsan >/dev/null

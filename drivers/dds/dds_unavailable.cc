@@ -3,6 +3,7 @@
 // unavailable output, and the rest of aprt runs.
 #include "drivers/dds/dds_listener.h"
 #include "drivers/dds/dds_publisher.h"
+#include "drivers/dds/pointcloud2_reader.h"
 
 namespace aprt {
 
@@ -46,6 +47,26 @@ int DdsListener::take_status(DdsReceivedStatus*, int) {
 }
 int DdsListener::publishers() const {
   return 0;
+}
+
+Expected<std::unique_ptr<PointCloud2Reader>> PointCloud2Reader::create(const PointCloud2Options&) {
+  return Error(Errc::kUnsupported,
+               "dds: this build has no DDS (Cyclone DDS was not found when it was configured; "
+               "install cyclonedds-dev for the target and rebuild): no PointCloud2 input");
+}
+
+PointCloud2Reader::~PointCloud2Reader() = default;
+
+bool PointCloud2Reader::take_latest(const PointRegion&, PointCloud*, int64_t, int64_t*) {
+  return false;
+}
+
+int PointCloud2Reader::publishers() const {
+  return 0;
+}
+
+const char* PointCloud2Reader::type_name() {
+  return "";
 }
 
 }  // namespace aprt

@@ -1,7 +1,9 @@
 // DDS output as a ROS 2 node sees it: a subscriber on the loopback-only
 // profile receives PoseWithCovarianceStamped under ROS 2's type name, and the
 // serialized sample is byte-identical to a CDR image built here by hand from
-// the ROS 2 message definitions (XCDR1, little endian, final).
+// the ROS 2 message definitions (XCDR1, little endian, final). And the LiDAR
+// input: PointCloud2 clouds written as a ROS 2 driver writes them arrive
+// decoded; the newest wins; a malformed one is counted with its reason.
 #include <dds/dds.h>
 #include <dds/ddsi/ddsi_serdata.h>
 #include <gtest/gtest.h>
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include "drivers/dds/dds_publisher.h"
+#include "drivers/dds/pointcloud2_reader.h"
 #include "ros2_interfaces.h"
 #include "runtime/common/allocation_counter.h"
 
@@ -193,6 +196,90 @@ TEST(Dds, BadTopicIsAClearError) {
   auto pub = DdsPublisher::create(o);
   ASSERT_FALSE(pub);
   EXPECT_NE(std::string(pub.error().message()).find("dds:"), std::string::npos);
+}
+
+// A ROS 2 LiDAR driver's side: PointCloud2 with x y z intensity float32 and
+// a ring field, 20-byte points (scan `k`: `n` points at x = k, y = i).
+struct CloudWriter {
+  dds_entity_t participant = 0, writer = 0;
+  explicit CloudWriter(const char* topic) {
+    participant = dds_create_participant(test_domain(), nullptr, nullptr);
+    const dds_entity_t t = dds_create_topic(participant, &sensor_msgs_msg_dds__PointCloud2__desc,
+                                            topic, nullptr, nullptr);
+    dds_qos_t* q = dds_create_qos();
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 5);
+    writer = dds_create_writer(participant, t, q, nullptr);
+    dds_delete_qos(q);
+  }
+  ~CloudWriter() {
+    if (participant > 0) dds_delete(participant);
+  }
+  void write(int k, uint32_t n, bool drop_z = false) {
+    char x[] = "x", y[] = "y", z[] = "z", in[] = "intensity", ring[] = "ring", frame[] = "lidar";
+    sensor_msgs_msg_dds__PointField_ f[5] = {
+        {x, 0, 7, 1}, {y, 4, 7, 1}, {z, 8, 7, 1}, {in, 12, 7, 1}, {ring, 16, 4, 1}};
+    std::vector<uint8_t> data(size_t(n) * 20, 0);
+    for (uint32_t i = 0; i < n; ++i) {
+      const float v[4] = {float(k), float(i), 0.5f, 3.0f};
+      std::memcpy(&data[size_t(i) * 20], v, sizeof v);
+    }
+    sensor_msgs_msg_dds__PointCloud2_ m{};
+    m.header.stamp.sec = 1795000000 + k;
+    m.header.frame_id = frame;
+    m.height = 1;
+    m.width = n;
+    m.fields._buffer = drop_z ? f + 3 : f;
+    m.fields._length = m.fields._maximum = drop_z ? 2 : 5;
+    m.point_step = 20;
+    m.row_step = 20 * n;
+    m.data._buffer = data.data();
+    m.data._length = m.data._maximum = uint32_t(data.size());
+    m.is_dense = true;
+    ASSERT_GE(dds_write(writer, &m), 0);
+  }
+};
+
+TEST(Dds, PointCloud2ArrivesDecodedNewestFirst) {
+  PointCloud2Options o;
+  o.domain = test_domain();
+  o.loopback_only = true;
+  o.topic = "/aprt_test/points";
+  o.reliable = true;  // the test must not lose samples; the default is best effort
+  auto reader = PointCloud2Reader::create(o);
+  ASSERT_TRUE(reader) << reader.error().message();
+  EXPECT_STREQ(PointCloud2Reader::type_name(), "sensor_msgs::msg::dds_::PointCloud2_");
+  CloudWriter w("rt/aprt_test/points");
+  for (int i = 0; i < 500 && (*reader)->publishers() == 0; ++i) usleep(10000);
+  ASSERT_EQ((*reader)->publishers(), 1);
+  auto cloud = std::move(PointCloud::create(1000).value());
+  int64_t stamp = 0;
+  EXPECT_FALSE((*reader)->take_latest(PointRegion{}, cloud.get(), 1000000, &stamp));
+  w.write(1, 300);
+  ASSERT_TRUE((*reader)->take_latest(PointRegion{}, cloud.get(), 2000000000, &stamp));
+  EXPECT_EQ(cloud->size(), 300u);
+  EXPECT_EQ(cloud->points()[150].y, 150.0f);
+  EXPECT_EQ(cloud->points()[299].y, 200.0f);  // through the gate: clipped to the region
+  EXPECT_EQ(cloud->stats().clipped, 99u);
+  EXPECT_EQ(cloud->points()[0].intensity, 3.0f);
+  EXPECT_EQ(stamp, int64_t(1795000001) * 1000000000);
+  // Three waiting: the newest is decoded, the two before it superseded.
+  w.write(2, 10);
+  w.write(3, 20);
+  w.write(4, 30);
+  usleep(200000);
+  ASSERT_TRUE((*reader)->take_latest(PointRegion{}, cloud.get(), 2000000000, &stamp));
+  EXPECT_EQ(cloud->size(), 30u);
+  EXPECT_EQ(cloud->points()[0].x, 4.0f);
+  EXPECT_EQ((*reader)->stats().superseded, 2u);
+  // A cloud without z: refused with its reason, the last good scan kept.
+  w.write(5, 40, true);
+  EXPECT_FALSE((*reader)->take_latest(PointRegion{}, cloud.get(), 2000000000, &stamp));
+  EXPECT_EQ(cloud->size(), 30u);
+  EXPECT_EQ((*reader)->stats().refused[size_t(CloudRefusal::kMissingField)], 1u);
+  EXPECT_NE(std::strstr((*reader)->stats().last_refusal, "no 'x' field"), nullptr)
+      << (*reader)->stats().last_refusal;
+  EXPECT_EQ((*reader)->stats().decoded, 2u);
 }
 
 }  // namespace

@@ -39,24 +39,33 @@ def ensure_ort():
                    check=True, env=dict(os.environ, ONNXRUNTIME_NODE_INSTALL="skip"))
 
 
-def ensure_model(size, out_root):
-    d = os.path.join(out_root, f"full_{size}")
+def ensure_model(size, out_root, config="full"):
+    d = os.path.join(out_root, f"{config}_{size}")
     if not os.path.exists(os.path.join(d, "model.aprt")):
-        print(f"run_bench: making the {size}x{size} model in {d}", flush=True)
+        print(f"run_bench: making the {config} {size}x{size} model in {d}", flush=True)
         env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "tools"), PYTHONWARNINGS="ignore")
-        sh([PYTHON, "-m", "aprt_tools", "golden", "--config", "full", "--size", str(size),
+        sh([PYTHON, "-m", "aprt_tools", "golden", "--config", config, "--size", str(size),
             "--count", "2", "--convert", "--out", d], env=env)
     return d
 
 
 def ensure_int8(d):
+    """Calibrated on demo-drive frames (camera) or on the golden inputs (BEV: any
+    input of the right shape serves a speed measurement)."""
     out = os.path.join(d, "model_int8.aprt")
     if not os.path.exists(out):
         print(f"run_bench: quantising {d}/model.aprt", flush=True)
         env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "tools"), PYTHONWARNINGS="ignore")
+        calib = os.path.join(ROOT, "data", "demo_drive")
+        if os.path.basename(d).startswith("bev"):
+            import numpy as np
+            cfg = json.load(open(os.path.join(d, "model.json")))
+            g, c = cfg["image_size"], cfg["in_channels"]
+            x = np.fromfile(os.path.join(d, "in_1.f32"), "<f4").reshape(1, c, g, g)
+            calib = os.path.join(d, "calibration.npy")
+            np.save(calib, np.abs(x.transpose(0, 2, 3, 1)))
         sh([PYTHON, "-m", "aprt_tools", "quantize", os.path.join(d, "model.aprt"),
-            "--calibration", os.path.join(ROOT, "data", "demo_drive"), "--frames", "4",
-            "-o", out], env=env)
+            "--calibration", calib, "--frames", "4", "-o", out], env=env)
     return out
 
 
@@ -100,13 +109,16 @@ def main():
     ap.add_argument("--models", default=os.path.join(ROOT, "build", "bench"))
     ap.add_argument("--markdown", help="also write the table to this file")
     ap.add_argument("--no-int8", action="store_true", help="fp32 only")
+    ap.add_argument("--bev", action="store_true",
+                    help="also the LiDAR BEV model (256 x 256 x 2 histogram, same network)")
     a = ap.parse_args()
     if not os.path.exists(a.aprt):
         sys.exit(f"run_bench: {a.aprt} not found: build first (tools/setup.sh)")
     ensure_ort()
-    sizes = [int(s) for s in a.sizes.split(",")]
+    sizes = [int(s) for s in a.sizes.split(",")] + (["bev"] if a.bev else [])
     threads = [int(t) for t in a.threads.split(",")]
-    models = {s: ensure_model(s, a.models) for s in sizes}
+    models = {s: ensure_model(256, a.models, "bev") if s == "bev" else ensure_model(s, a.models)
+              for s in sizes}
     ort = {(s, t): [] for s in sizes for t in threads}
     ours = {(s, t): [] for s in sizes for t in threads}
     int8 = {(s, t): [] for s in sizes for t in threads}
@@ -136,7 +148,8 @@ def main():
         for t in threads:
             om, am = statistics.median(ort[(s, t)]), statistics.median(ours[(s, t)])
             d = info[(s, t)]
-            row = (f"| {s}x{s} | {t} | {om:.1f} | {p99(ort[(s, t)]):.1f} | {am:.1f} | "
+            label = "BEV 256x256x2" if s == "bev" else f"{s}x{s}"
+            row = (f"| {label} | {t} | {om:.1f} | {p99(ort[(s, t)]):.1f} | {am:.1f} | "
                    f"{p99(ours[(s, t)]):.1f} | **{om / am:.2f}x** |")
             if not a.no_int8:
                 qm = statistics.median(int8[(s, t)])
