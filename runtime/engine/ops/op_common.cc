@@ -52,4 +52,29 @@ Status expect_act(const OpNode& node, int32_t act) {
   return ok();
 }
 
+Status expect_int8_weights(const OpNode& node, const Tensor* w, int channels) {
+  APRT_OP_ENSURE(node, w->is_const(), Errc::kBadTensor, "int8 weights '%s' must be a constant",
+                 w->name);
+  APRT_OP_ENSURE(node, w->zero_point == 0, Errc::kBadTensor,
+                 "int8 weights '%s' have zero point %d (symmetric weights need 0)", w->name,
+                 w->zero_point);
+  APRT_OP_ENSURE(node, (w->scale > 0.0f) != (w->qscale != nullptr), Errc::kBadTensor,
+                 "int8 weights '%s' need exactly one of a per-tensor scale or per-channel scales",
+                 w->name);
+  APRT_OP_ENSURE(node, !w->qscale || w->qscale->numel == size_t(channels), Errc::kBadTensor,
+                 "int8 weights '%s' have %zu per-channel scales for %d output channels", w->name,
+                 w->qscale ? w->qscale->numel : 0, channels);
+  return ok();
+}
+
+Status expect_input_quantisation(const OpNode& node, int at, float* scale, int32_t* zero) {
+  *scale = param_f32(node, at);
+  *zero = node.params[at + 1];
+  APRT_OP_ENSURE(node, std::isfinite(*scale) && *scale > 0.0f, Errc::kBadTensor,
+                 "input quantisation scale %g (must be finite and > 0)", double(*scale));
+  APRT_OP_ENSURE(node, *zero >= 0 && *zero <= 255, Errc::kBadTensor,
+                 "input zero point %d out of range [0, 255]", *zero);
+  return ok();
+}
+
 }  // namespace aprt::ops

@@ -32,6 +32,18 @@ inline float param_f32(const OpNode& node, int i) {
 
 Status expect_act(const OpNode& node, int32_t act);
 
+// int8 ops (FORMAT.md, "Quantised ops"): weights `w` are a symmetric i8
+// constant with one per-tensor scale or `channels` per-channel scales.
+Status expect_int8_weights(const OpNode& node, const Tensor* w, int channels);
+// The op's input quantisation in params[at] (scale, f32 bits) and params[at + 1]
+// (zero point): finite scale > 0, zero point in [0, 255].
+Status expect_input_quantisation(const OpNode& node, int at, float* scale, int32_t* zero);
+// Floats that hold `bytes` bytes, in whole 64-byte lines (int8 data in the
+// engine's float-counted scratch and packed areas).
+inline size_t floats_for_bytes(size_t bytes) {
+  return (bytes + 63) / 64 * 16;
+}
+
 // Tasks for an m x n x k product: enough to keep `threads` busy, none much
 // smaller than 64k multiply-adds. rows: in rows, whole mr tiles; panels: in
 // nr-column panels. Task t covers rows.begin(t % rows.tasks) and panels

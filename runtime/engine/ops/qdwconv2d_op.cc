@@ -24,10 +24,6 @@ struct QDwState {
   size_t w_at;  // floats into node.packed: mult [C] at 0, then the weights as floats
 };
 
-size_t floats_for_bytes(size_t bytes) {
-  return (bytes + 63) / 64 * 16;
-}
-
 size_t input_bytes(const QDwState& s) {
   return size_t(s.shape.in_h) * s.shape.in_w * s.shape.in_c;
 }
@@ -78,26 +74,14 @@ void pack_qdwconv(OpNode& node) {
 Status prepare_qdwconv2d(OpNode& node, kernels::Conv2dShape shape, Split rows) {
   const Tensor* w = node.in[1];
   const int C = shape.in_c;
-  APRT_OP_ENSURE(node, w->is_const(), Errc::kBadTensor, "int8 weights '%s' must be a constant",
-                 w->name);
-  APRT_OP_ENSURE(node, w->zero_point == 0, Errc::kBadTensor,
-                 "int8 weights '%s' have zero point %d (symmetric weights need 0)", w->name,
-                 w->zero_point);
-  APRT_OP_ENSURE(node, (w->scale > 0.0f) != (w->qscale != nullptr), Errc::kBadTensor,
-                 "int8 weights '%s' need exactly one of a per-tensor scale or per-channel scales",
-                 w->name);
-  APRT_OP_ENSURE(node, !w->qscale || w->qscale->numel == size_t(C), Errc::kBadTensor,
-                 "int8 weights '%s' have %zu per-channel scales for %d channels", w->name,
-                 w->qscale ? w->qscale->numel : 0, C);
+  Status st;
+  if (!(st = expect_int8_weights(node, w, C))) return st;
   APRT_OP_ENSURE(node, shape.kernel_h * shape.kernel_w <= kernels::kMaxQDwTaps, Errc::kUnsupported,
                  "int8 depthwise kernel %dx%d has more than %d taps", shape.kernel_h,
                  shape.kernel_w, kernels::kMaxQDwTaps);
-  const float a_scale = param_f32(node, 7);
-  const int32_t a_zero = node.params[8];
-  APRT_OP_ENSURE(node, std::isfinite(a_scale) && a_scale > 0.0f, Errc::kBadTensor,
-                 "input quantisation scale %g (must be finite and > 0)", double(a_scale));
-  APRT_OP_ENSURE(node, a_zero >= 0 && a_zero <= 255, Errc::kBadTensor,
-                 "input zero point %d out of range [0, 255]", a_zero);
+  float a_scale;
+  int32_t a_zero;
+  if (!(st = expect_input_quantisation(node, 7, &a_scale, &a_zero))) return st;
   auto& s = node.state_as<QDwState>();
   s.shape = shape;
   s.act = static_cast<kernels::Act>(node.params[6]);

@@ -113,10 +113,6 @@ void pack_qlinear(OpNode& node) {
                       reinterpret_cast<int8_t*>(node.packed + s.weights_at));
 }
 
-size_t floats_for_bytes(size_t bytes) {
-  return (bytes + 63) / 64 * 16;  // whole 64-byte lines
-}
-
 }  // namespace
 
 Status prepare_qlinear(OpNode& node) {
@@ -128,16 +124,8 @@ Status prepare_qlinear(OpNode& node) {
   if (!(st = expect_f32(node, x, "input", false))) return st;
   APRT_OP_ENSURE(node, w->is_const() && w->rank == 2, Errc::kShapeMismatch,
                  "int8 weights '%s' must be a constant [N, K]", w->name);
-  APRT_OP_ENSURE(node, w->zero_point == 0, Errc::kBadTensor,
-                 "int8 weights '%s' have zero point %d (symmetric weights need 0)", w->name,
-                 w->zero_point);
   const int n = w->dims[0], k = w->dims[1];
-  APRT_OP_ENSURE(node, (w->scale > 0.0f) != (w->qscale != nullptr), Errc::kBadTensor,
-                 "int8 weights '%s' need exactly one of a per-tensor scale or per-channel scales",
-                 w->name);
-  APRT_OP_ENSURE(node, !w->qscale || w->qscale->numel == size_t(n), Errc::kBadTensor,
-                 "int8 weights '%s' have %zu per-channel scales for %d output channels", w->name,
-                 w->qscale ? w->qscale->numel : 0, n);
+  if (!(st = expect_int8_weights(node, w, n))) return st;
   if (!(st = expect_f32(node, b, "bias", true))) return st;
   if (!(st = expect_f32(node, y, "output", false))) return st;
   if (!(st = expect_act(node, node.params[0]))) return st;
@@ -153,12 +141,9 @@ Status prepare_qlinear(OpNode& node) {
     APRT_OP_ENSURE(node, node.in[3]->numel == y->numel, Errc::kShapeMismatch,
                    "residual has %zu elements, output %zu", node.in[3]->numel, y->numel);
   }
-  const float a_scale = param_f32(node, 1);
-  const int32_t a_zero = node.params[2];
-  APRT_OP_ENSURE(node, std::isfinite(a_scale) && a_scale > 0.0f, Errc::kBadTensor,
-                 "input quantisation scale %g (must be finite and > 0)", double(a_scale));
-  APRT_OP_ENSURE(node, a_zero >= 0 && a_zero <= 255, Errc::kBadTensor,
-                 "input zero point %d out of range [0, 255]", a_zero);
+  float a_scale;
+  int32_t a_zero;
+  if (!(st = expect_input_quantisation(node, 1, &a_scale, &a_zero))) return st;
   auto& s = node.state_as<QLinearState>();
   s.shape = {int(x->rows()), n, k};
   s.act = static_cast<kernels::Act>(node.params[0]);
