@@ -4,12 +4,15 @@ runtime's kernels compute the same histogram is checked by the C++
 Preprocess.BevHistogramMatchesTheTrainingTransform on cases this module writes.)"""
 
 import json
+import os
+import tempfile
 import unittest
 
 import numpy as np
 import torch
 
 from aprt_tools.convert.convert import convert
+from aprt_tools.convert.quantize import CalibrationError, quantize_model
 from aprt_tools.export import export_onnx
 from aprt_tools.lidar_bev import BEV_KEYS, bev_histogram, bev_meta
 from aprt_tools.model.apr_transformer import AprConfig, AprTransformer
@@ -69,6 +72,33 @@ class Configurations(unittest.TestCase):
         self.assertEqual(meta["input_shape"], [1, 64, 64, 2])
         np.testing.assert_allclose(meta["bev"], bev_meta(cfg.bev), rtol=1e-7)
         self.assertLess(report.max_rel_error_output, 1e-4)
+
+
+class Int8(unittest.TestCase):
+    def test_bev_model_calibrates_on_a_lidar_sequence(self):
+        cfg = AprConfig.named("tiny-bev")
+        torch.manual_seed(4)
+        blob, _ = convert(export_onnx(vary(AprTransformer(cfg), 4), 13),
+                          config=json.loads(cfg.to_json()))
+        with tempfile.TemporaryDirectory() as d:
+            os.makedirs(os.path.join(d, "lidar"))
+            rng = np.random.default_rng(0)
+            lines = []
+            for k in range(3):
+                pts = rng.uniform(-20, 20, (3000, 4)).astype(np.float32)
+                pts[:, 2] = rng.uniform(-2, 2, 3000)
+                pts.tofile(os.path.join(d, "lidar", f"{k}.bin"))
+                lines.append(f"lidar/{k}.bin {k} 0 1.9 1 0 0 0")
+            with open(os.path.join(d, "lidar_poses.txt"), "w") as f:
+                f.write("\n".join(lines) + "\n")
+            q, report = quantize_model(blob, d, frames=8)
+            self.assertEqual(report.frames, 3)
+            self.assertGreater(len(report.ops), 0)
+            _, meta = read(q)
+            self.assertEqual(meta["bev"], read(blob)[1]["bev"])
+            os.remove(os.path.join(d, "lidar_poses.txt"))
+            with self.assertRaisesRegex(CalibrationError, "no lidar_poses.txt"):
+                quantize_model(blob, d)
 
 
 if __name__ == "__main__":

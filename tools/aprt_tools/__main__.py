@@ -116,6 +116,11 @@ def cmd_train(a):
         f.write(export_onnx(model, 13))
     a.onnx, a.output, a.config_json = f"{a.out}/model.onnx", f"{a.out}/model.aprt", f"{a.out}/model.json"
     cmd_convert(a)
+    if a.int8:  # calibrated on the training sequence itself (frames spread over it)
+        a.model, a.calibration, a.output = f"{a.out}/model.aprt", a.data, f"{a.out}/model_int8.aprt"
+        a.method, a.percentile, a.frames, a.fp32_ops = "percentile", 99.99, 64, None
+        a.backbone = a.sensitivity = a.verbose = False
+        cmd_quantize(a)
 
 
 def cmd_plot_eval(a):
@@ -215,6 +220,8 @@ def main(argv=None):
     t.add_argument("--threads", type=int, default=2)
     t.add_argument("--hidden", type=int, default=128, help="transformer width (d_model)")
     t.add_argument("--layers", type=int, default=3, help="encoder and decoder layers per branch")
+    t.add_argument("--int8", action="store_true",
+                   help="also write model_int8.aprt, calibrated on 64 frames of --data")
     t.add_argument("--modality", default="image", choices=("image", "bev"),
                    help="bev: LiDAR scans (lidar_poses.txt) as BEV histograms, grid --size")
     t.set_defaults(fn=cmd_train)

@@ -4,9 +4,10 @@
 
 1. Calibration: the fp32 graph (engine_ir semantics, the runtime's) runs over
    the calibration frames -- a DeepLoc-layout folder (poses.txt + images, or
-   just images) preprocessed exactly as the runtime does, or a .npy of
-   preprocessed inputs [N, H, W, C] -- and the input values of every op the
-   policy makes int8 are collected.
+   just images) preprocessed exactly as the runtime does; for a LiDAR BEV
+   model a LiDAR sequence (lidar_poses.txt + KITTI scans) as histograms with
+   the model's geometry; or a .npy of preprocessed inputs [N, H, W, C] -- and
+   the input values of every op the policy makes int8 are collected.
 2. Ranges per activation tensor (uint8, asymmetric, per tensor): `minmax`,
    `percentile` (the p-th percentile of |values| at either end) or `mse` (the
    clipping range that minimises the quantisation error of the collected
@@ -91,11 +92,42 @@ def _prepare_image(path: str, meta: dict) -> np.ndarray:
     return ((x - mean) / std).permute(1, 2, 0).numpy()[None].astype(np.float32)
 
 
+def _lidar_inputs(folder: str, meta: dict, limit: int) -> list:
+    """A LiDAR sequence (lidar_poses.txt + scans) as the BEV model's inputs."""
+    from ..dataset import read_poses
+    from ..lidar_bev import BEV_KEYS, bev_histogram, read_kitti
+
+    if "bev" not in meta:
+        raise CalibrationError("calibration: a LiDAR sequence calibrates a BEV model only; this "
+                               "model has no 'bev' geometry")
+    try:
+        names = [n for n, _, _ in read_poses(folder, "lidar_poses.txt")]
+    except ValueError as e:
+        raise CalibrationError(f"calibration: {e}") from None
+    bev = dict(zip(BEV_KEYS, meta["bev"]))
+    grid = meta["input_shape"][1]
+    mean = np.asarray(meta["norm_mean"], np.float32)
+    std = np.asarray(meta["norm_std"], np.float32)
+    out = []
+    for i in np.unique(np.linspace(0, len(names) - 1, min(limit, len(names))).astype(int)):
+        try:
+            h = bev_histogram(read_kitti(os.path.join(folder, names[i])), grid, bev)
+        except (OSError, ValueError) as e:
+            raise CalibrationError(f"calibration: {e}") from None
+        out.append(((h - mean) / std)[None].astype(np.float32))
+    return out
+
+
 def load_calibration(path: str, meta: dict, limit: int) -> list:
     """Calibration inputs as [1, H, W, C] float32 arrays (at most `limit`, spread evenly)."""
     shape = tuple(meta["input_shape"])
     if not os.path.exists(path):
         raise CalibrationError(f"calibration: {path} does not exist")
+    if os.path.isdir(path) and meta.get("modality") == spec.MODALITY_LIDAR_BEV:
+        if not os.path.exists(os.path.join(path, "lidar_poses.txt")):
+            raise CalibrationError(f"calibration: {path} has no lidar_poses.txt (a BEV model "
+                                   "calibrates on LiDAR scans, or on a .npy of histograms)")
+        return _lidar_inputs(path, meta, limit)
     if os.path.isdir(path):
         files = _image_files(path)
         if not files:
