@@ -210,6 +210,23 @@ TEST(ModelFile, RefusesBrokenGraphs) {
   EXPECT_FALSE(parse(write_const));
 }
 
+// Found by the fuzzer: an absent (-1) weight input of a depthwise convolution
+// reached the int8 check before the null check.
+TEST(ModelFile, EngineRefusesAbsentWeights) {
+  auto dw = test::make_small_model([](ModelBuilder& m) {
+    m.set_inputs(m.op_index("dw"), {m.tensor_index("stem.out"), -1, m.tensor_index("dw.b")});
+  });
+  expect_load_error(dw, Errc::kBadOp, "op 1 'dw' (DWCONV2D): weights is missing");
+  auto lin = test::make_small_model([](ModelBuilder& m) {
+    m.set_inputs(m.op_index("proj"), {m.tensor_index("se.out"), -1, m.tensor_index("proj.b")});
+  });
+  expect_load_error(lin, Errc::kBadOp, "weights is missing");
+  auto q = test::make_small_int8_model([](ModelBuilder& m) {
+    m.set_inputs(m.op_index("proj"), {m.tensor_index("se.out"), m.tensor_index("proj.w.int8"), -1});
+  });
+  expect_load_error(q, Errc::kBadOp, "bias is missing");
+}
+
 TEST(ModelFile, EngineRefusesShapesInconsistentWithOps) {
   auto k = test::make_small_model([](ModelBuilder& m) {
     m.set_dims(m.tensor_index("proj.out"), {1, 4, 4, 15});

@@ -68,7 +68,7 @@ Status prepare(OpNode& node, bool depthwise) {
   const Tensor* y = node.out[0];
   Status st;
   if (!(st = expect_f32(node, x, "input", false))) return st;
-  const bool int8 = depthwise && w->dtype == format::DType::kI8;  // qdwconv2d_op.cc
+  const bool int8 = depthwise && w && w->dtype == format::DType::kI8;  // qdwconv2d_op.cc
   if (!int8 && !(st = expect_f32(node, w, "weights", true))) return st;
   if (!(st = expect_f32(node, b, "bias", true))) return st;
   if (!(st = expect_f32(node, y, "output", false))) return st;
