@@ -10,6 +10,8 @@
 
 namespace aprt {
 
+class FrameSlot;
+
 enum class SourceResult {
   kFrame,        // `dst` holds a new frame
   kTimeout,      // nothing within the timeout (the thread still beats its heartbeat)
@@ -33,6 +35,10 @@ class FrameSource {
   virtual void stop() = 0;
   // The last failure or skip reason (valid until the next call).
   virtual const Error& error() const = 0;
+  // Replays paced by their consumer (rate 0): the slot it takes from, and how
+  // many frames it has taken. Devices ignore both.
+  virtual void pace_with(const FrameSlot*) {}
+  virtual void note_taken(uint64_t) {}
 };
 
 int64_t monotonic_ns();

@@ -61,6 +61,12 @@ int cmd_info(int argc, char** argv) {
         "counts clipped at %.4g\n",
         m.input_shape[1], m.input_shape[2], double(m.bev_cell_m), double(m.bev_x_min),
         double(m.bev_y_min), double(m.bev_height_threshold_m), double(m.bev_clip_count));
+  } else if (m.has_points) {
+    std::printf(
+        "points       %u farthest-point samples of the scan within %.4g m (x^2 + y^2), features "
+        "p / %.4g m and (p - mean) / %.4g m\n",
+        m.input_shape[1], double(m.points_crop_radius_m), double(m.points_coord_scale_m),
+        double(m.points_coord_scale_m));
   } else {
     std::printf("normalise    mean (");
     for (int c = 0; c < m.norm_channels; ++c) std::printf("%s%.4g", c ? ", " : "", m.norm_mean[c]);

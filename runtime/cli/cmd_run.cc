@@ -40,7 +40,8 @@ std::string resolve(const std::string& path, const std::string& base) {
 // model is loaded for real (checksums, op set, memory plan) with the
 // configured engine options.
 std::string source_text(const Config::Source& s) {
-  if (s.type == "replay") return s.replay.path;
+  if (s.type == "replay" || s.type == "lidar_replay") return s.replay.path;
+  if (s.type == "pointcloud2") return "PointCloud2 on rt" + s.pointcloud2.topic;
   if (s.type == "libcamera") {
     return "libcamera camera " +
            (s.libcamera.camera.empty() ? std::string("0") : s.libcamera.camera);
@@ -56,6 +57,10 @@ int check_only(const std::string& path, const Config& cfg) {
     return 2;
   }
   if (!note.empty()) std::printf("aprt run: %s: %s\n", cfg.model.c_str(), note.c_str());
+  if (Status fit = model_fits_source((*engine)->meta(), cfg.source, cfg.model); !fit) {
+    std::fprintf(stderr, "aprt run: %s: %s\n", path.c_str(), fit.error().message());
+    return 2;
+  }
   std::printf("aprt run: %s: configuration valid; model %s loads (%s kernels, %zu bytes)\n",
               path.c_str(), cfg.model.c_str(), (*engine)->isa(), (*engine)->memory().total_bytes);
   if (!cfg.cameras.empty()) {

@@ -6,7 +6,7 @@
 #include "drivers/frame/frame.h"
 #include "drivers/lidar/lidar_sequence.h"
 #include "drivers/replay/deeploc_replay.h"
-#include "kernels/common/lidar_fast.h"
+#include "kernels/common/lidar_input.h"
 #include "kernels/common/preprocess_image.h"
 #include "runtime/engine/model_input.h"
 
@@ -59,8 +59,9 @@ class CameraInputs final : public EvalInputs {
 };
 
 // Scans of up to kMaxPoints points (more are dropped and counted by the
-// gate); the histogram as the model file describes it.
-class LidarBevInputs final : public EvalInputs {
+// gate), made into the model's input as the runtime does (BEV histogram or
+// sampled points, kernels/common/lidar_input.h), with the model's geometry.
+class LidarInputs final : public EvalInputs {
  public:
   static constexpr size_t kMaxPoints = size_t(1) << 20;
 
@@ -75,17 +76,19 @@ class LidarBevInputs final : public EvalInputs {
       std::fprintf(stderr, "aprt eval: %s\n", cloud.error().message());
       return nullptr;
     }
-    std::unique_ptr<LidarBevInputs> in(new LidarBevInputs());
+    std::unique_ptr<LidarInputs> in(new LidarInputs());
     in->seq_ = std::move(seq.value());
     in->cloud_ = std::move(cloud.value());
     const ModelMeta& m = e.meta();
-    in->bev_ = {int(m.input_shape[1]),    m.bev_cell_m,    m.bev_x_min, m.bev_y_min,
-                m.bev_height_threshold_m, m.bev_clip_count};
-    for (int c = 0; c < 2; ++c) {
-      in->mean_[c] = m.norm_mean[c];
-      in->inv_std_[c] = 1.0f / m.norm_std[c];
+    in->points_model_ = m.modality == format::Modality::kLidarPoints;
+    in->fast_ = e.kernel_set() != nullptr;
+    if (in->points_model_) {
+      in->points_ = points_input_params(m);
+      in->scratch_.resize(kernels::lidar_points_input_scratch(kMaxPoints, in->points_.samples));
+    } else {
+      in->bev_ = bev_input_params(m);
+      in->counts_.resize(size_t(in->bev_.bev.grid) * in->bev_.bev.grid * 2);
     }
-    in->counts_.resize(size_t(in->bev_.grid) * in->bev_.grid * 2);
     return in;
   }
   size_t size() const override { return seq_->size(); }
@@ -94,9 +97,12 @@ class LidarBevInputs final : public EvalInputs {
       *why = keep_reason(s.error());
       return false;
     }
-    kernels::lidar_bev_histogram(cloud_->points(), cloud_->size(), bev_, counts_.data(), input);
-    const size_t n = counts_.size();
-    for (size_t k = 0; k < n; ++k) input[k] = (input[k] - mean_[k & 1]) * inv_std_[k & 1];
+    if (points_model_) {
+      kernels::lidar_points_input(points_, cloud_->points(), cloud_->size(), fast_, scratch_.data(),
+                                  input);
+    } else {
+      kernels::lidar_bev_input(bev_, cloud_->points(), cloud_->size(), counts_.data(), input);
+    }
     const ReplayEntry& en = seq_->entry(i);
     f->name = en.name;
     f->position = en.position;
@@ -107,9 +113,11 @@ class LidarBevInputs final : public EvalInputs {
  private:
   std::unique_ptr<LidarSequence> seq_;
   std::unique_ptr<PointCloud> cloud_;
-  kernels::BevParams bev_{};
-  float mean_[2] = {}, inv_std_[2] = {1, 1};
+  bool points_model_ = false, fast_ = true;
+  kernels::BevInputParams bev_{};
+  kernels::PointsInputParams points_{};
   std::vector<uint16_t> counts_;
+  std::vector<float> scratch_;
 };
 
 }  // namespace
@@ -117,12 +125,12 @@ class LidarBevInputs final : public EvalInputs {
 std::unique_ptr<EvalInputs> open_eval_inputs(const char* data, const Engine& engine) {
   switch (engine.meta().modality) {
     case format::Modality::kImage: return CameraInputs::open(data, engine);
-    case format::Modality::kLidarBev: return LidarBevInputs::open(data, engine);
-    default:
-      std::fprintf(stderr, "aprt eval: no evaluation for modality '%s' yet\n",
-                   format::modality_name(engine.meta().modality));
-      return nullptr;
+    case format::Modality::kLidarBev:
+    case format::Modality::kLidarPoints: return LidarInputs::open(data, engine);
   }
+  std::fprintf(stderr, "aprt eval: no evaluation for modality '%s'\n",
+               format::modality_name(engine.meta().modality));
+  return nullptr;
 }
 
 }  // namespace aprt::cli

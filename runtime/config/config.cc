@@ -202,8 +202,9 @@ Status read_source(Reader& r, const Node* src, const std::string& path, Config::
   const auto join = [&](const std::string& p, const char* k) { return Reader::join(p, k); };
 #define TRY(expr) \
   if (!(s = (expr))) return s
-  TRY(r.map(src, path, {"type", "replay", "v4l2", "libcamera"}));
-  TRY(r.str(src, path, "type", &src_out->type, {"replay", "v4l2", "libcamera"}));
+  TRY(r.map(src, path, {"type", "replay", "v4l2", "libcamera", "pointcloud2", "lidar"}));
+  TRY(r.str(src, path, "type", &src_out->type,
+            {"replay", "v4l2", "libcamera", "lidar_replay", "pointcloud2"}));
   const Node* rp = src ? src->get("replay") : nullptr;
   TRY(r.map(rp, join(path, "replay"), {"path", "rate_hz", "loop", "frames"}));
   TRY(r.str(rp, join(path, "replay"), "path", &src_out->replay.path));
@@ -234,6 +235,31 @@ Status read_source(Reader& r, const Node* src, const std::string& path, Config::
             {"YUYV", "UYVY", "NV12", "RGB24", "BGR24", "MJPEG"}));
   TRY(r.str(lc, lp, "role", &src_out->libcamera.role, {"viewfinder", "video", "still"}));
   TRY(r.integer(lc, lp, "buffers", 2, 32, &src_out->libcamera.buffers));
+  const Node* pc = src ? src->get("pointcloud2") : nullptr;
+  const std::string pp = join(path, "pointcloud2");
+  TRY(r.map(pc, pp, {"topic", "domain", "reliable", "depth", "loopback_only"}));
+  TRY(r.str(pc, pp, "topic", &src_out->pointcloud2.topic));
+  TRY(r.integer(pc, pp, "domain", 0, 232, &src_out->pointcloud2.domain));
+  TRY(r.boolean(pc, pp, "reliable", &src_out->pointcloud2.reliable));
+  TRY(r.integer(pc, pp, "depth", 1, 100, &src_out->pointcloud2.depth));
+  TRY(r.boolean(pc, pp, "loopback_only", &src_out->pointcloud2.loopback_only));
+  const Node* li = src ? src->get("lidar") : nullptr;
+  const std::string lip = join(path, "lidar");
+  TRY(r.map(li, lip, {"max_points", "region", "min_points"}));
+  TRY(r.integer(li, lip, "max_points", 1, 1 << 22, &src_out->lidar.max_points));
+  TRY(r.integer(li, lip, "min_points", 0, 1 << 22, &src_out->lidar.min_points));
+  const Node* rg = li ? li->get("region") : nullptr;
+  const std::string rgp = join(lip, "region");
+  TRY(r.map(rg, rgp, {"x_min", "x_max", "y_min", "y_max", "z_min", "z_max"}));
+  static const char* const kRegion[6] = {"x_min", "x_max", "y_min", "y_max", "z_min", "z_max"};
+  for (int k = 0; k < 6; ++k) {
+    TRY(r.num(rg, rgp, kRegion[k], -1e5, 1e5, &src_out->lidar.region[k]));
+  }
+  for (int k = 0; k < 6; k += 2) {
+    if (!(src_out->lidar.region[k] < src_out->lidar.region[k + 1])) {
+      return r.fail(rg, rgp, "every axis needs min < max");
+    }
+  }
 
 #undef TRY
   return ok();
@@ -471,9 +497,18 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
                  "by `aprt sign keygen`)",
                  origin.c_str());
   }
-  if (c.source.type == "replay" && c.source.replay.path.empty()) {
-    return Error(Errc::kInvalidArgument, "%s: source.replay.path is required for a replay source",
-                 origin.c_str());
+  if ((c.source.type == "replay" || c.source.type == "lidar_replay") &&
+      c.source.replay.path.empty()) {
+    return Error(Errc::kInvalidArgument, "%s: source.replay.path is required for a %s source",
+                 origin.c_str(), c.source.type.c_str());
+  }
+  for (const Config::Camera& cam : c.cameras) {
+    if (cam.source.lidar_source()) {
+      return Error(Errc::kInvalidArgument,
+                   "%s: cameras.%s: a LiDAR source (%s) is one sensor: give it as `source`, not "
+                   "in `cameras`",
+                   origin.c_str(), cam.name.c_str(), cam.source.type.c_str());
+    }
   }
   return c;
 }

@@ -38,14 +38,15 @@ struct Config {
   } engine;
 
   struct Source {
-    std::string type = "replay";  // replay | v4l2 | libcamera
+    // replay | v4l2 | libcamera (camera frames); lidar_replay | pointcloud2 (LiDAR scans)
+    std::string type = "replay";
     struct Replay {
       std::string path;
       double rate_hz = 10.0;  // 0: as fast as inference takes frames; "recorded": times.txt
       bool recorded = false;
       bool loop = false;
       int frames = 0;  // stop after this many frames (0: the whole sequence, or forever with loop)
-    } replay;
+    } replay;          // also lidar_replay's: path is the LiDAR sequence (lidar_poses.txt + scans)
     struct V4l2 {
       std::string device = "/dev/video0";
       int width = 640, height = 480;
@@ -61,6 +62,21 @@ struct Config {
       int fps = 30;
       int buffers = 4;
     } libcamera;
+    struct PointCloud2 {  // sensor_msgs/msg/PointCloud2 over DDS (drivers/dds/pointcloud2_reader.h)
+      std::string topic = "/points_raw";  // ROS name ("rt" is prepended)
+      int domain = 0;
+      bool reliable = false;  // ROS 2 sensor-data QoS: best effort
+      int depth = 5;
+      bool loopback_only = false;
+    } pointcloud2;
+    struct Lidar {              // every LiDAR source: the point buffer and its gate
+      int max_points = 200000;  // more in one scan are dropped and counted
+      // points outside are clipped onto the box (and counted)
+      double region[6] = {-200, 200, -200, 200, -20, 40};  // x_min x_max y_min y_max z_min z_max
+      int min_points = 1;  // a scan with fewer points is flagged sparse (points models: also
+                           // any scan with fewer points than the model samples)
+    } lidar;
+    bool lidar_source() const { return type == "lidar_replay" || type == "pointcloud2"; }
   } source;
 
   // Several cameras, fused into one pose (runtime/pose/pose_fusion.h). Empty:

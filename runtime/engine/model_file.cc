@@ -47,6 +47,11 @@ const char* op_name(OpCode code) noexcept {
     case OpCode::kActivation: return "ACTIVATION";
     case OpCode::kConcat: return "CONCAT";
     case OpCode::kCrossAttention1q: return "CROSS_ATTENTION_1Q";
+    case OpCode::kFps: return "FPS";
+    case OpCode::kBallGroup: return "BALL_GROUP";
+    case OpCode::kGroupMax: return "GROUP_MAX";
+    case OpCode::kThreeInterp: return "THREE_INTERP";
+    case OpCode::kGridTokens: return "GRID_TOKENS";
   }
   return "?";
 }
@@ -308,13 +313,13 @@ class ModelFileParser {
           mark(3);
           break;
         case MetaKey::kNormMean:
-          if (!(st = expect(MetaType::kF32, 1, 4))) return st;
+          if (!(st = expect(MetaType::kF32, 1, ModelMeta::kMaxChannels))) return st;
           m.norm_channels = int(len / 4);
           if (!(st = f32s(m.norm_mean, len / 4, "norm_mean"))) return st;
           mark(4);
           break;
         case MetaKey::kNormStd:
-          if (!(st = expect(MetaType::kF32, 1, 4))) return st;
+          if (!(st = expect(MetaType::kF32, 1, ModelMeta::kMaxChannels))) return st;
           if (!(st = f32s(m.norm_std, len / 4, "norm_std"))) return st;
           for (uint32_t i = 0; i < len / 4; ++i) {
             APRT_ENSURE(m.norm_std[i] > 0.0f, Errc::kBadMetadata,
@@ -394,6 +399,19 @@ class ModelFileParser {
           m.bev_clip_count = b[4];
           break;
         }
+        case MetaKey::kPoints: {
+          if (!(st = expect(MetaType::kF32, 2, 2))) return st;
+          float p[2] = {0.0f, 0.0f};
+          if (!(st = f32s(p, 2, "points"))) return st;
+          APRT_ENSURE(p[0] > 0.0f && p[0] <= 1000.0f, Errc::kBadMetadata,
+                      "model_bin: points crop radius %g m (0 < radius <= 1000)", double(p[0]));
+          APRT_ENSURE(p[1] > 0.0f && p[1] <= 1000.0f, Errc::kBadMetadata,
+                      "model_bin: points coordinate scale %g m (0 < scale <= 1000)", double(p[1]));
+          m.has_points = true;
+          m.points_crop_radius_m = p[0];
+          m.points_coord_scale_m = p[1];
+          break;
+        }
         case MetaKey::kQuantization:
           if (!(st = expect(MetaType::kStr, 0, 1u << 16))) return st;
           m.quantization = reinterpret_cast<const char*>(v);
@@ -427,6 +445,14 @@ class ModelFileParser {
                   "threshold, clip count)");
       APRT_ENSURE(m.input_shape[1] == m.input_shape[2] && m.input_shape[3] == 2, Errc::kBadMetadata,
                   "model_bin: a LiDAR BEV input is a square 2-channel grid, not %ux%ux%u",
+                  m.input_shape[1], m.input_shape[2], m.input_shape[3]);
+    }
+    if (m.modality == format::Modality::kLidarPoints) {
+      APRT_ENSURE(m.has_points, Errc::kBadMetadata,
+                  "model_bin: a LiDAR points model needs metadata 'points' (crop radius, "
+                  "coordinate scale)");
+      APRT_ENSURE(m.input_shape[2] == 1 && m.input_shape[3] == 6, Errc::kBadMetadata,
+                  "model_bin: a LiDAR points input is N points x 1 x 6 features, not %ux%ux%u",
                   m.input_shape[1], m.input_shape[2], m.input_shape[3]);
     }
     return ok();

@@ -19,14 +19,15 @@
 namespace aprt {
 
 struct ModelMeta {
+  static constexpr int kMaxChannels = 8;  // input channels with a normalisation
   char producer[64] = {};
   uint8_t source_sha256[32] = {};
   char source_name[128] = {};
   format::Modality modality = format::Modality::kImage;
   uint32_t input_shape[4] = {};  // N, H, W, C
   int norm_channels = 0;
-  float norm_mean[4] = {};
-  float norm_std[4] = {};
+  float norm_mean[kMaxChannels] = {};
+  float norm_std[kMaxChannels] = {};
   format::ResizePolicy resize_policy = format::ResizePolicy::kShorterThenCenterCrop;
   float pose_min[3] = {};
   float pose_max[3] = {};
@@ -47,6 +48,10 @@ struct ModelMeta {
   bool has_bev = false;
   float bev_cell_m = 0.0f, bev_x_min = 0.0f, bev_y_min = 0.0f;
   float bev_height_threshold_m = 0.0f, bev_clip_count = 0.0f;
+  // LiDAR points models (modality 3): the crop and the coordinate scale of the
+  // features (docs/lidar.md); the sample count is the input's H.
+  bool has_points = false;
+  float points_crop_radius_m = 0.0f, points_coord_scale_m = 0.0f;
 };
 
 struct TensorEntry {

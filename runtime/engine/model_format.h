@@ -10,7 +10,7 @@ namespace aprt::format {
 
 inline constexpr char kMagic[8] = {'A', 'P', 'R', 'T', 'M', 'D', 'L', '\0'};
 inline constexpr uint16_t kVersionMajor = 1;
-inline constexpr uint16_t kVersionMinor = 1;  // 1.1: int8 LINEAR (FORMAT.md)
+inline constexpr uint16_t kVersionMinor = 2;  // 1.1: int8 weights; 1.2: point ops (FORMAT.md)
 inline constexpr uint32_t kHeaderBytes = 64;
 inline constexpr uint32_t kSectionEntryBytes = 32;
 inline constexpr uint32_t kTensorEntryBytes = 64;
@@ -54,8 +54,14 @@ enum class OpCode : uint16_t {
   kActivation = 8,
   kConcat = 9,
   kCrossAttention1q = 10,
+  // 1.2: the raw-points modality (PointNet++)
+  kFps = 11,
+  kBallGroup = 12,
+  kGroupMax = 13,
+  kThreeInterp = 14,
+  kGridTokens = 15,
 };
-inline constexpr uint16_t kMaxOpCode = 10;
+inline constexpr uint16_t kMaxOpCode = 15;
 
 enum class Act : int32_t { kNone = 0, kSilu = 1, kGelu = 2, kSigmoid = 3, kRelu = 4 };
 inline constexpr int32_t kMaxAct = 4;
@@ -83,6 +89,7 @@ enum class MetaKey : uint16_t {
   kConfigJson = 41,
   kQuantization = 42,
   kBev = 50,
+  kPoints = 51,
 };
 
 enum class Modality : uint32_t { kImage = 1, kLidarBev = 2, kLidarPoints = 3 };

@@ -12,8 +12,18 @@ EngineOptions engine_options(const Config& config) {
   eo.isa = config.engine.isa.c_str();
   eo.cpus = config.engine.cpus.empty() ? nullptr : config.engine.cpus.data();
   eo.n_cpus = int(config.engine.cpus.size());
-  eo.expect_modality = uint32_t(format::Modality::kImage);
+  // The model's modality is checked against the configured source by
+  // model_fits_source(), which can name the remedy.
   return eo;
+}
+
+Status model_fits_source(const ModelMeta& m, const Config::Source& src, const std::string& model) {
+  const bool lidar_model = m.modality != format::Modality::kImage;
+  if (src.lidar_source() == lidar_model) return ok();
+  return Error(Errc::kWrongTarget, "run: %s is a %s model, but source.type '%s' gives %s (%s)",
+               model.c_str(), format::modality_name(m.modality), src.type.c_str(),
+               src.lidar_source() ? "LiDAR scans" : "camera frames",
+               lidar_model ? "use lidar_replay or pointcloud2" : "use replay, v4l2 or libcamera");
 }
 
 Expected<std::unique_ptr<Engine>> load_model(const Config& config, std::string* note) {
@@ -53,6 +63,26 @@ Expected<std::unique_ptr<Engine>> load_model(const Config& config, std::string* 
 }
 
 Status reload_compatible(const ModelMeta& running, const ModelMeta& next) {
+  if (running.modality != next.modality) {
+    return Error(Errc::kInvalidArgument,
+                 "reload: the new model is a %s model, the running one %s; restart aprt to "
+                 "change the sensor",
+                 format::modality_name(next.modality), format::modality_name(running.modality));
+  }
+  // A LiDAR model's input is made with its file's geometry: the same or a restart.
+  const bool same_bev = running.bev_cell_m == next.bev_cell_m &&
+                        running.bev_x_min == next.bev_x_min &&
+                        running.bev_y_min == next.bev_y_min &&
+                        running.bev_height_threshold_m == next.bev_height_threshold_m &&
+                        running.bev_clip_count == next.bev_clip_count;
+  const bool same_points = running.points_crop_radius_m == next.points_crop_radius_m &&
+                           running.points_coord_scale_m == next.points_coord_scale_m;
+  if (!same_bev || !same_points) {
+    return Error(Errc::kInvalidArgument,
+                 "reload: the new model's LiDAR %s differs from the running one's; restart aprt "
+                 "to change the preprocessing",
+                 same_bev ? "crop or coordinate scale" : "histogram geometry");
+  }
   for (int i = 0; i < 4; ++i) {
     if (running.input_shape[i] != next.input_shape[i]) {
       return Error(Errc::kInvalidArgument,

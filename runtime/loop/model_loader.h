@@ -21,6 +21,10 @@ EngineOptions engine_options(const Config& config);
 Expected<std::unique_ptr<Engine>> load_model(const Config& config, std::string* note);
 
 // ok() when `next` can replace `running` between two frames.
+// A camera model needs a camera source, a LiDAR model a LiDAR one (the message
+// names the source types that would fit).
+Status model_fits_source(const ModelMeta& m, const Config::Source& src, const std::string& model);
+
 Status reload_compatible(const ModelMeta& running, const ModelMeta& next);
 
 }  // namespace aprt

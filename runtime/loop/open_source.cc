@@ -2,9 +2,19 @@
 
 #include "drivers/camera/libcamera_source.h"
 #include "drivers/camera/v4l2_source.h"
+#include "drivers/dds/pointcloud2_source.h"
+#include "drivers/lidar/lidar_replay_source.h"
 #include "drivers/replay/replay_source.h"
 
 namespace aprt {
+
+ScanSourceOptions scan_options(const Config::Source& src) {
+  ScanSourceOptions o;
+  o.max_points = size_t(src.lidar.max_points);
+  const double* r = src.lidar.region;
+  o.region = {float(r[0]), float(r[1]), float(r[2]), float(r[3]), float(r[4]), float(r[5])};
+  return o;
+}
 
 Expected<OpenedSource> open_source(const Config::Source& src) {
   OpenedSource o;
@@ -45,6 +55,25 @@ Expected<OpenedSource> open_source(const Config::Source& src) {
     o.width = lo.width;
     o.height = lo.height;
     o.format = dev.value()->format();
+    o.source = std::move(dev.value());
+  } else if (src.type == "lidar_replay") {
+    ReplayPacing pacing{src.replay.rate_hz, src.replay.recorded, src.replay.loop,
+                        uint64_t(src.replay.frames)};
+    auto replay = LidarReplaySource::open(src.replay.path.c_str(), pacing, scan_options(src));
+    if (!replay) return replay.error();
+    o.frames = replay.value()->size();
+    o.scans = true;
+    o.source = std::move(replay.value());
+  } else if (src.type == "pointcloud2") {
+    PointCloud2Options po;
+    po.domain = uint32_t(src.pointcloud2.domain);
+    po.topic = src.pointcloud2.topic;
+    po.depth = src.pointcloud2.depth;
+    po.reliable = src.pointcloud2.reliable;
+    po.loopback_only = src.pointcloud2.loopback_only;
+    auto dev = PointCloud2Source::create(po, scan_options(src));
+    if (!dev) return dev.error();
+    o.scans = true;
     o.source = std::move(dev.value());
   } else {
     return Error(Errc::kUnsupported, "run: source type '%s' is not available in this build",

@@ -1,5 +1,6 @@
-// A configured camera source (replay, V4L2, libcamera) created with the frame
-// geometry the preprocessing plan needs. Start-up only.
+// A configured source created with what the preprocessing needs: a camera
+// (replay, V4L2, libcamera) with its frame geometry, or a LiDAR (lidar_replay,
+// pointcloud2) delivering gated scans. Start-up only.
 #pragma once
 
 #include <memory>
@@ -14,8 +15,13 @@ struct OpenedSource {
   std::unique_ptr<FrameSource> source;
   int width = 0, height = 0;  // what the source is configured to deliver
   kernels::PixelFormat format = kernels::PixelFormat::kRgb24;
-  size_t frames = 0;  // a replay's length (0 for a device)
+  size_t frames = 0;   // a replay's length (0 for a device)
+  bool scans = false;  // LiDAR scans (FrameKind::kScan), not images
 };
+
+// The point gate of a LiDAR source (drivers/lidar/point_cloud.h) from the configuration.
+struct ScanSourceOptions;
+ScanSourceOptions scan_options(const Config::Source& src);
 
 Expected<OpenedSource> open_source(const Config::Source& src);
 

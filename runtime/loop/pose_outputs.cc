@@ -106,7 +106,8 @@ void PoseOutputs::publish(const PoseRecord& r, int64_t now_ns,
                           int64_t realtime_offset_ns) noexcept {
   if (!dds_ && !can_sender_) return;
   last_ = geometry_->to_base_link(r.pose);
-  const int64_t stamp_ns = r.capture_ns + realtime_offset_ns;
+  const int64_t stamp_ns =
+      r.source_stamp_ns ? r.source_stamp_ns : r.capture_ns + realtime_offset_ns;
   const bool valid = r.flags == 0 && r.state == RunState::kRunning;
   if (dds_) {
     if (valid) {

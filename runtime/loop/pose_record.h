@@ -12,6 +12,7 @@ inline constexpr uint32_t kPoseStaleFrame = 1u << 8;      // frame older than fr
 inline constexpr uint32_t kPoseDeadlineMissed = 1u << 9;  // inference over its deadline
 inline constexpr uint32_t kPoseJump = 1u << 10;           // implausible jump from the last pose
 inline constexpr uint32_t kPoseNoQuorum = 1u << 11;       // cameras disagree: no majority (fusion)
+inline constexpr uint32_t kPoseSparseScan = 1u << 12;     // LiDAR: too few points (padded or empty)
 
 enum class RunState : uint8_t { kStarting, kRunning, kDegraded, kFault, kStopping };
 const char* run_state_name(RunState s);
@@ -29,7 +30,8 @@ struct PoseRecord {
   uint64_t index = 0;           // n-th pose of this run
   uint64_t frame_sequence = 0;  // source frame counter
   uint32_t source = 0;
-  int64_t capture_ns = 0;  // the frame's capture time: the pose's timestamp
+  int64_t capture_ns = 0;       // the frame's capture time: the pose's timestamp
+  int64_t source_stamp_ns = 0;  // the sensor's own stamp (PointCloud2 header), if any: used instead
   int64_t inference_start_ns = 0;
   int64_t inference_end_ns = 0;
   PoseEstimate pose;   // sensor pose in the map frame

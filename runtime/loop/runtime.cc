@@ -114,12 +114,30 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
     const int width = opened->width, height = opened->height;
     const kernels::PixelFormat format = opened->format;
     if (i == 0) frames = opened->frames;
+    ch->scans = opened->scans;
     ch->source = std::move(opened->source);
     auto slot = FrameSlot::create(ch->source->max_frame_bytes());
     if (!slot) return slot.error();
     ch->slot = std::move(slot.value());
-    if (src.type == "replay" && src.replay.rate_hz == 0 && !src.replay.recorded) {
-      static_cast<ReplaySource*>(ch->source.get())->pace_with(ch->slot.get());
+    if (ch->replay() && src.replay.rate_hz == 0 && !src.replay.recorded) {
+      ch->source->pace_with(ch->slot.get());
+    }
+    const format::Modality modality = r->engine_->meta().modality;
+    if (Status fit = model_fits_source(r->engine_->meta(), src, config.model); !fit) {
+      return fit.error();
+    }
+    if (ch->scans) {
+      const size_t max_points = size_t(src.lidar.max_points);
+      if (modality == format::Modality::kLidarPoints) {
+        r->points_input_ = points_input_params(r->engine_->meta());
+        r->scan_scratch_.resize(
+            kernels::lidar_points_input_scratch(max_points, r->points_input_.samples));
+      } else {
+        r->bev_input_ = bev_input_params(r->engine_->meta());
+        r->bev_counts_.resize(size_t(r->bev_input_.bev.grid) * r->bev_input_.bev.grid * 2);
+      }
+      r->cameras_.push_back(std::move(ch));
+      continue;
     }
     ch->plan.reset(new (std::nothrow) kernels::PreprocessPlan());
     const kernels::KernelSet* ks = r->engine_->kernel_set();
@@ -294,7 +312,7 @@ const FrameBuffer* Runtime::take_frame(Channel& c, int64_t deadline_ns) noexcept
     if (left <= 0 || c.done.load(std::memory_order_acquire)) return nullptr;
     c.slot->wait(seen, std::min(left, kWaitNs));
   }
-  if (c.replay()) static_cast<ReplaySource*>(c.source.get())->note_taken(f->info.sequence + 1);
+  if (c.replay()) c.source->note_taken(f->info.sequence + 1);
   return f;
 }
 
@@ -311,6 +329,26 @@ bool fit_plan(kernels::PreprocessPlan* plan, const FrameBuffer& f) {
 }
 
 }  // namespace
+
+// A scan to the LiDAR model's input, the histogram's or the sampler's, with
+// the geometry of the running model (a reloaded model keeps its input: the
+// reload check, model_loader.cc, refuses another). @rt: bounded by the
+// configured point count, no allocation.
+uint32_t Runtime::scan_input(Engine& e, const FrameBuffer& f) {
+  const size_t n = f.info.scan.points;
+  kernels::LidarInputResult r;
+  if (e.meta().modality == format::Modality::kLidarPoints) {
+    r = kernels::lidar_points_input(points_input_, f.points(), n, e.kernel_set() != nullptr,
+                                    scan_scratch_.data(), e.input().f32());
+  } else {
+    r = kernels::lidar_bev_input(bev_input_, f.points(), n, bev_counts_.data(), e.input().f32());
+  }
+  if (!r.enough || r.points < size_t(config_.source.lidar.min_points)) {
+    ++sparse_scans_;
+    return kPoseSparseScan;
+  }
+  return 0;
+}
 
 void Runtime::inference_loop() {
   Engine* e = engine_.get();
@@ -339,8 +377,7 @@ void Runtime::inference_loop() {
         continue;
       }
     }
-    if (trigger.replay())
-      static_cast<ReplaySource*>(trigger.source.get())->note_taken(f->info.sequence + 1);
+    if (trigger.replay()) trigger.source->note_taken(f->info.sequence + 1);
     // A reloaded model takes over here, between two frames; the old one goes
     // back to the supervisor, which frees it (never this thread).
     if (Engine* next = pending_.exchange(nullptr, std::memory_order_acq_rel)) {
@@ -351,11 +388,12 @@ void Runtime::inference_loop() {
     PoseRecord rec;
     rec.inference_start_ns = monotonic_ns();
     rec.capture_ns = f->info.capture_ns;
+    rec.source_stamp_ns = f->info.source_stamp_ns;
     rec.frame_sequence = f->info.sequence;
     rec.source = f->info.source;
     uint32_t flags = 0;
     if (rec.inference_start_ns - f->info.capture_ns > stale_ns) flags |= kPoseStaleFrame;
-    if (!fit_plan(trigger.plan.get(), *f)) {
+    if (!trigger.scans && !fit_plan(trigger.plan.get(), *f)) {
       frames_skipped_.fetch_add(1, std::memory_order_relaxed);
       continue;
     }
@@ -382,7 +420,11 @@ void Runtime::inference_loop() {
     CameraEstimate est[kMaxFusedCameras];
     for (size_t i = 0; i < n_cams; ++i) {
       if (!frames[i]) continue;
-      kernels::preprocess_image(*cameras_[i]->plan, frames[i]->view(), e->input().f32());
+      if (cameras_[i]->scans) {
+        flags |= scan_input(*e, *frames[i]);
+      } else {
+        kernels::preprocess_image(*cameras_[i]->plan, frames[i]->view(), e->input().f32());
+      }
       (void)e->run();
       if (i == 0 && faults_.nan_output(index)) {
         e->output().f32()[0] = std::numeric_limits<float>::quiet_NaN();
@@ -475,6 +517,8 @@ void Runtime::print_pose(const PoseRecord& r) {
   if (r.flags & kPoseJump) std::strncat(flags, ",jump", sizeof flags - std::strlen(flags) - 1);
   if (r.flags & kPoseNoQuorum)
     std::strncat(flags, ",no-quorum", sizeof flags - std::strlen(flags) - 1);
+  if (r.flags & kPoseSparseScan)
+    std::strncat(flags, ",sparse", sizeof flags - std::strlen(flags) - 1);
   if (r.fusion.cameras > 1) {  // agreeing / configured cameras
     char cams[24];
     std::snprintf(cams, sizeof cams, " cams %u/%u", unsigned(r.fusion.inliers),
@@ -581,6 +625,11 @@ void Runtime::print_summary() {
         percentile(infer, 0.5), percentile(infer, 0.99), percentile(infer, 1.0),
         percentile(e2e, 0.5), percentile(e2e, 0.99), percentile(e2e, 1.0), engine_->isa(),
         engine_->threads());
+  }
+  if (cameras_[0]->scans) {
+    std::printf("lidar: %llu of %llu scans too sparse for the model (flagged)\n",
+                static_cast<unsigned long long>(stats_.sparse_scans),
+                static_cast<unsigned long long>(stats_.poses));
   }
   if (cameras_.size() > 1) {
     std::printf("fusion: %zu cameras; %llu of %llu cycles without a quorum\n", cameras_.size(),
@@ -724,6 +773,7 @@ int Runtime::run() {
   stats_.frames_skipped = frames_skipped_.load();
   stats_.frames_dropped = cameras_[0]->slot->dropped();
   stats_.fusion_no_quorum = fusion_no_quorum_;
+  stats_.sparse_scans = sparse_scans_;
   stats_.cameras.clear();
   for (const auto& c : cameras_) {
     stats_.cameras.push_back(

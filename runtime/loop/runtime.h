@@ -27,6 +27,7 @@
 
 #include "drivers/frame/frame_slot.h"
 #include "drivers/frame/frame_source.h"
+#include "kernels/common/lidar_input.h"
 #include "kernels/common/preprocess_image.h"
 #include "runtime/config/config.h"
 #include "runtime/engine/engine.h"
@@ -62,6 +63,7 @@ struct RunStats {
   // (configuration order) frames captured, cycles it had no frame in time,
   // estimates flagged, and estimates rejected as outliers.
   uint64_t fusion_no_quorum = 0;
+  uint64_t sparse_scans = 0;  // LiDAR: scans with too few points (flagged estimates)
   struct Camera {
     uint64_t frames = 0, missing = 0, flagged = 0, outliers = 0, dropped = 0;
   };
@@ -136,7 +138,8 @@ class Runtime {
     std::string source_type;
     std::unique_ptr<FrameSource> source;
     std::unique_ptr<FrameSlot> slot;
-    std::unique_ptr<kernels::PreprocessPlan> plan;
+    std::unique_ptr<kernels::PreprocessPlan> plan;  // cameras
+    bool scans = false;                             // a LiDAR: scans, not images
     Eigen::Isometry3d base_from_sensor = Eigen::Isometry3d::Identity();
     std::atomic<bool> done{false}, failed{false};
     std::atomic<int64_t> beat{0};
@@ -144,7 +147,7 @@ class Runtime {
     uint64_t missing = 0, flagged = 0, outliers = 0;  // inference thread
     pthread_t thread{};
     bool started = false;
-    bool replay() const { return source_type == "replay"; }
+    bool replay() const { return source_type == "replay" || source_type == "lidar_replay"; }
   };
   static void* channel_main(void* channel);
   void capture_loop(Channel& c);
@@ -195,6 +198,14 @@ class Runtime {
   pthread_t inference_{}, publish_{};
   bool threads_started_[2] = {};
   uint64_t fusion_no_quorum_ = 0;  // inference thread
+  // A LiDAR model's input from a scan (kernels/common/lidar_input.h): the
+  // parameters from the model file, scratch for the configured point count.
+  kernels::BevInputParams bev_input_{};
+  kernels::PointsInputParams points_input_{};
+  std::vector<float> scan_scratch_;
+  std::vector<uint16_t> bev_counts_;
+  uint32_t scan_input(Engine& e, const FrameBuffer& f);  // inference thread; returns flags
+  uint64_t sparse_scans_ = 0;
   void join_threads();
   int64_t started_ns_ = 0;
   std::vector<TimingRecord> timings_;

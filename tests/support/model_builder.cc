@@ -134,6 +134,7 @@ std::vector<uint8_t> ModelBuilder::build() const {
   meta_record(meta, 20, 2, pose_min.data(), uint32_t(pose_min.size() * 4));
   meta_record(meta, 21, 2, pose_max.data(), uint32_t(pose_max.size() * 4));
   if (!bev.empty()) meta_record(meta, 50, 2, bev.data(), uint32_t(bev.size() * 4));
+  if (!points.empty()) meta_record(meta, 51, 2, points.data(), uint32_t(points.size() * 4));
   meta_record(meta, 31, 1, &d_model, 4);
   meta_record(meta, 32, 1, &nheads, 4);
   meta_record(meta, 33, 1, &enc_layers, 4);
@@ -309,7 +310,60 @@ void build_small(ModelBuilder& b) {
   b.op(OpCode::kConcat, "pose", {yt, yr}, {out});
 }
 
+void build_small_points(ModelBuilder& b) {
+  using format::OpCode;
+  b.modality = 3;
+  b.points = {20.0f, 20.0f};
+  const int x = b.input("input", {1, 64, 1, 6});
+  const int c1 = b.activation("fps1.out", {1, 16, 1, 3});
+  b.op(OpCode::kFps, "fps1", {x}, {c1});
+  const int g1 = b.activation("group1.out", {1, 16, 4, 9});
+  b.op(OpCode::kBallGroup, "group1", {x, c1, x}, {g1}, {ModelBuilder::f32_bits(0.5f)});
+  const int w1 = b.constant("mlp1.w", {8, 9}, random_values(72, 21, 0.5f));
+  const int b1 = b.constant("mlp1.b", {8}, random_values(8, 22, 0.1f));
+  const int m1 = b.activation("mlp1.out", {1, 16, 4, 8});
+  b.op(OpCode::kLinear, "mlp1", {g1, w1, b1}, {m1}, {4});
+  const int f1 = b.activation("max1.out", {1, 16, 1, 8});
+  b.op(OpCode::kGroupMax, "max1", {m1}, {f1});
+  const int c2 = b.activation("fps2.out", {1, 4, 1, 3});
+  b.op(OpCode::kFps, "fps2", {c1}, {c2});
+  const int g2 = b.activation("group2.out", {1, 4, 4, 11});
+  b.op(OpCode::kBallGroup, "group2", {c1, c2, f1}, {g2}, {ModelBuilder::f32_bits(1.0f)});
+  const int f2 = b.activation("max2.out", {1, 4, 1, 11});
+  b.op(OpCode::kGroupMax, "max2", {g2}, {f2});
+  const int up = b.activation("interp.out", {1, 16, 1, 11});
+  b.op(OpCode::kThreeInterp, "interp", {c1, c2, f2}, {up});
+  const int cat = b.activation("cat.out", {1, 16, 1, 19});
+  b.op(OpCode::kConcat, "cat", {up, f1}, {cat});
+  const int tok = b.activation("tokens.out", {1, 2, 4, 19});
+  b.op(OpCode::kGridTokens, "tokens", {c1, cat}, {tok}, {2, 2, 2});
+  const int wp = b.constant("proj.w", {16, 19}, random_values(16 * 19, 23, 0.5f));
+  const int bp = b.constant("proj.b", {16}, random_values(16, 24, 0.1f));
+  const int pr = b.activation("proj.out", {8, 16});
+  b.op(OpCode::kLinear, "proj", {tok, wp, bp}, {pr}, {0});
+  const int q = b.constant("query", {1, 16}, random_values(16, 25, 1.0f));
+  const int pool = b.activation("pool.out", {1, 16});
+  b.op(OpCode::kAttention, "pool", {q, pr, pr}, {pool}, {2, ModelBuilder::f32_bits(0.35f)});
+  const int wt = b.constant("head_t.w", {3, 16}, random_values(48, 26, 0.5f));
+  const int bt = b.constant("head_t.b", {3}, random_values(3, 27, 0.1f));
+  const int yt = b.activation("head_t.out", {1, 3});
+  b.op(OpCode::kLinear, "head_t", {pool, wt, bt}, {yt}, {0});
+  const int wr = b.constant("head_r.w", {4, 16}, random_values(64, 28, 0.5f));
+  const int br = b.constant("head_r.b", {4}, random_values(4, 29, 0.1f));
+  const int yr = b.activation("head_r.out", {1, 4});
+  b.op(OpCode::kLinear, "head_r", {pool, wr, br}, {yr}, {0});
+  const int out = b.output("pose", {1, 7});
+  b.op(OpCode::kConcat, "pose", {yt, yr}, {out});
+}
+
 }  // namespace
+
+std::vector<uint8_t> make_small_points_model(void (*edit)(ModelBuilder&)) {
+  ModelBuilder b;
+  build_small_points(b);
+  if (edit) edit(b);
+  return b.build();
+}
 
 std::vector<uint8_t> make_small_model() {
   return make_small_model(nullptr);

@@ -44,7 +44,8 @@ class ModelBuilder {
 
   // Metadata (sensible defaults; the input shape is taken from the input tensor).
   uint32_t modality = 1;
-  std::vector<float> bev;  // META 'bev' (cell, x_min, y_min, threshold, clip) when not empty
+  std::vector<float> bev;     // META 'bev' (cell, x_min, y_min, threshold, clip) when not empty
+  std::vector<float> points;  // META 'points' (crop radius, coordinate scale) when not empty
   std::vector<float> pose_min{0, 0, 0}, pose_max{10, 20, 5};
   uint32_t d_model = 16, nheads = 2, enc_layers = 1, dec_layers = 1;
   uint16_t version_major = format::kVersionMajor;
@@ -82,6 +83,11 @@ std::vector<uint8_t> make_small_model(void (*edit)(ModelBuilder&));
 // weights "proj.w.int8" with per-channel scales "proj.w.qscale", input scale
 // 0.02, zero point 100.
 std::vector<uint8_t> make_small_int8_model(void (*edit)(ModelBuilder&) = nullptr);
+// A small raw-points model (modality 3) using every point op: input
+// [1, 64, 1, 6] -> FPS 16 -> ball group -> MLP -> max -> FPS 4 -> ball group
+// -> max -> 3-NN interpolation back to 16 ++ skip -> 2 x 2 x 2 grid tokens ->
+// projection -> attention pooling -> pose [1, 7].
+std::vector<uint8_t> make_small_points_model(void (*edit)(ModelBuilder&) = nullptr);
 
 struct SectionInfo {
   uint32_t tag;

@@ -38,7 +38,9 @@ class SpecAgreement(unittest.TestCase):
         cc_names = {"kConv2d": "CONV2D", "kDwConv2d": "DWCONV2D", "kLinear": "LINEAR",
                     "kSqueezeExcite": "SQUEEZE_EXCITE", "kAdd": "ADD", "kLayerNorm": "LAYERNORM",
                     "kAttention": "ATTENTION", "kActivation": "ACTIVATION", "kConcat": "CONCAT",
-                    "kCrossAttention1q": "CROSS_ATTENTION_1Q"}
+                    "kCrossAttention1q": "CROSS_ATTENTION_1Q", "kFps": "FPS",
+                    "kBallGroup": "BALL_GROUP", "kGroupMax": "GROUP_MAX",
+                    "kThreeInterp": "THREE_INTERP", "kGridTokens": "GRID_TOKENS"}
         ops = enum_values(self.h, "OpCode")
         self.assertEqual({cc_names[k]: v for k, v in ops.items()},
                          {n: c for c, n in spec.OP_NAMES.items()})

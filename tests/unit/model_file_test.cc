@@ -90,7 +90,7 @@ TEST(ModelFile, RefusesBadMagicAndVersion) {
   expect_error(b, Errc::kBadMagic, "bad magic");
   ModelBuilder mb;
   auto v2 = test::make_small_model([](ModelBuilder& m) { m.version_major = 2; });
-  expect_error(v2, Errc::kUnsupportedVersion, "unsupported version 2.1");
+  expect_error(v2, Errc::kUnsupportedVersion, "unsupported version 2.");
 }
 
 TEST(ModelFile, RefusesTrailingBytesAndWrongEndianness) {

@@ -17,6 +17,7 @@
 #include "kernels/common/cpu_features.h"
 #include "kernels/common/kernel_set.h"
 #include "kernels/common/lidar_fast.h"
+#include "kernels/common/lidar_input.h"
 #include "kernels/common/preprocess_image.h"
 #include "kernels/ref/lidar__ref.h"
 #include "kernels/ref/preprocess_image__ref.h"
@@ -140,6 +141,49 @@ TEST(Preprocess, BevHistogramMatchesTheTrainingTransform) {
     ++checked;
   }
   EXPECT_EQ(checked, 3);
+}
+
+TEST(Preprocess, PointsInputMatchesTheTrainingTransform) {
+  const std::string dir = test::env_dir("APRT_PREPROCESS_DIR");
+  if (dir.empty()) GTEST_SKIP() << "APRT_PREPROCESS_DIR not set";
+  std::ifstream cases(dir + "/points.txt");
+  ASSERT_TRUE(cases) << "points.txt missing";
+  auto reader = ScanReader::create();
+  auto cloud = PointCloud::create(1 << 16);
+  ASSERT_TRUE(reader && cloud);
+  std::string line;
+  int checked = 0;
+  while (std::getline(cases, line)) {
+    std::istringstream f(line);
+    std::string name;
+    kernels::PointsInputParams p{0, 0, 0, {0, 0, 0, 0, 0, 0}, {1, 1, 1, 1, 1, 1}};
+    int enough = 0;
+    f >> name >> p.samples >> p.crop_radius_m >> p.coord_scale_m >> enough;
+    ASSERT_TRUE(f) << line;
+    // Through the runtime's reader and gate, as a replayed or live scan goes.
+    ASSERT_TRUE((*reader)->read((dir + "/" + name + ".bin").c_str(), PointRegion{}, cloud->get()));
+    const auto want = test::read_f32(dir + "/" + name + ".f32");
+    ASSERT_EQ(want.size(), size_t(p.samples) * 6);
+    const PointCloud& pc = **cloud;
+    std::vector<float> scratch(kernels::lidar_points_input_scratch(pc.size(), p.samples));
+    for (bool fast : {false, true}) {
+      std::vector<float> got(want.size(), -1.0f);
+      const auto r =
+          kernels::lidar_points_input(p, pc.points(), pc.size(), fast, scratch.data(), got.data());
+      EXPECT_EQ(r.enough, enough != 0) << name;
+      for (size_t i = 0; i < want.size(); ++i) {
+        // Coordinates are copies (exact); the mean is summed in double in a
+        // different order than numpy's pairwise sum, a last-bit difference at most.
+        ASSERT_NEAR(got[i], want[i], 1e-6f * (1.0f + std::fabs(want[i])))
+            << name << " sample " << i / 6 << " feature " << i % 6 << (fast ? " fast" : " ref");
+        if (i % 6 < 3) {
+          ASSERT_EQ(got[i], want[i]) << name << " sample " << i / 6;
+        }
+      }
+    }
+    ++checked;
+  }
+  EXPECT_EQ(checked, 4);
 }
 
 TEST(Preprocess, DecoderRefusesCorruptFiles) {

@@ -9,6 +9,9 @@ import sys
 from .model_bin import spec
 
 
+CONFIGS = ("tiny", "full", "tiny-bev", "bev", "tiny-points", "points")
+
+
 def _floats(text: str) -> list:
     return [float(v) for v in text.split(",")]
 
@@ -19,7 +22,8 @@ def cmd_golden(a):
 
     cfg = AprConfig.named(a.config, a.size)
     m = make_golden(cfg, a.out, seed=a.seed, opset=a.opset, count=a.count)
-    print(f"golden: {a.config} {cfg.image_size}x{cfg.image_size} opset {a.opset} -> {a.out} "
+    shape = "x".join(str(v) for v in cfg.input_shape()[1:])
+    print(f"golden: {a.config} input {shape} opset {a.opset} -> {a.out} "
           f"(relative output spread {m['min_relative_spread']:.2f})")
     if a.convert:
         a.onnx, a.output = f"{a.out}/model.onnx", f"{a.out}/model.aprt"
@@ -108,6 +112,8 @@ def cmd_train(a):
     from .export import export_onnx
     from .train import train
 
+    if a.size is None:
+        a.size = 4096 if a.modality == "points" else 128
     model, cfg = train(a.data, a.out, size=a.size, minutes=a.minutes, batch=a.batch, lr=a.lr,
                        seed=a.seed, threads=a.threads, hidden=a.hidden, layers=a.layers,
                        modality=a.modality)
@@ -157,7 +163,7 @@ def main(argv=None):
     sub = p.add_subparsers(dest="cmd", required=True)
 
     g = sub.add_parser("golden", help="write a varied-weight model, its ONNX, inputs and outputs")
-    g.add_argument("--config", default="tiny", choices=("tiny", "full", "tiny-bev", "bev"))
+    g.add_argument("--config", default="tiny", choices=CONFIGS)
     g.add_argument("--size", type=int, help="input side (default: the configuration's)")
     g.add_argument("--opset", type=int, default=13, choices=(13, 17))
     g.add_argument("--seed", type=int, default=1)
@@ -173,7 +179,7 @@ def main(argv=None):
     gi.set_defaults(fn=cmd_golden_int8)
 
     e = sub.add_parser("export", help="export the reference model (optionally a checkpoint)")
-    e.add_argument("--config", default="full", choices=("tiny", "full", "tiny-bev", "bev"))
+    e.add_argument("--config", default="full", choices=CONFIGS)
     e.add_argument("--config-json", help="configuration file written by export/train")
     e.add_argument("--size", type=int)
     e.add_argument("--weights", help="PyTorch checkpoint (upstream or ours), loaded strictly")
@@ -212,7 +218,8 @@ def main(argv=None):
     t = sub.add_parser("train", help="train the reference model on a DeepLoc-layout sequence (CPU)")
     t.add_argument("--data", required=True, help="folder with poses.txt and the images")
     t.add_argument("--out", required=True)
-    t.add_argument("--size", type=int, default=128)
+    t.add_argument("--size", type=int, default=None,
+                   help="image side / BEV grid (default 128), or points sampled (default 4096)")
     t.add_argument("--minutes", type=float, default=90.0, help="wall-clock training budget")
     t.add_argument("--batch", type=int, default=16)
     t.add_argument("--lr", type=float, default=1e-4)
@@ -222,8 +229,9 @@ def main(argv=None):
     t.add_argument("--layers", type=int, default=3, help="encoder and decoder layers per branch")
     t.add_argument("--int8", action="store_true",
                    help="also write model_int8.aprt, calibrated on 64 frames of --data")
-    t.add_argument("--modality", default="image", choices=("image", "bev"),
-                   help="bev: LiDAR scans (lidar_poses.txt) as BEV histograms, grid --size")
+    t.add_argument("--modality", default="image", choices=("image", "bev", "points"),
+                   help="bev: LiDAR scans (lidar_poses.txt) as BEV histograms, grid --size; "
+                        "points: the same scans through PointNet++, --size points")
     t.set_defaults(fn=cmd_train)
 
     pe = sub.add_parser("plot-eval", help="trajectory and error plot from `aprt eval --csv` files")

@@ -16,7 +16,7 @@ import torch
 
 from .export import export_onnx
 from .model.apr_transformer import AprConfig, AprTransformer
-from .model.weights import smooth_images, vary
+from .model.weights import sample_inputs, vary
 
 MIN_SPREAD = 0.05  # std across inputs / mean magnitude, per output, at least
 
@@ -32,8 +32,11 @@ def make_golden(cfg: AprConfig, out_dir: str, *, seed: int = 1, opset: int = 13,
     with open(os.path.join(out_dir, "model.json"), "w") as f:
         f.write(cfg.to_json())
     gen = torch.Generator().manual_seed(seed + 1000)
-    inputs = [torch.randn(1, cfg.in_channels, cfg.image_size, cfg.image_size, generator=gen)]
-    inputs += [smooth_images(1, cfg.in_channels, cfg.image_size, gen) for _ in range(count - 1)]
+    if cfg.points:  # scans: random points would make FPS and the ball query meaningless
+        inputs = [sample_inputs(1, cfg, gen) for _ in range(count)]
+    else:
+        inputs = [torch.randn(*cfg.input_shape(), generator=gen)]
+        inputs += [sample_inputs(1, cfg, gen) for _ in range(count - 1)]
     outs = []
     with torch.no_grad():
         for k, x in enumerate(inputs):
@@ -44,7 +47,7 @@ def make_golden(cfg: AprConfig, out_dir: str, *, seed: int = 1, opset: int = 13,
     outs = np.stack(outs)
     spread = float((outs.std(axis=0) / (np.abs(outs).mean(axis=0) + 1e-9)).min())
     manifest = dict(config=json.loads(cfg.to_json()), seed=seed, opset=opset, count=count,
-                    input_shape=[1, cfg.in_channels, cfg.image_size, cfg.image_size],
+                    input_shape=list(cfg.input_shape()),
                     min_relative_spread=spread, outputs=outs.tolist())
     with open(os.path.join(out_dir, "golden.json"), "w") as f:
         json.dump(manifest, f, indent=1)

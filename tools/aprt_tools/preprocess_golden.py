@@ -69,6 +69,7 @@ def write_cases(out: str, seed: int = 3):
     prepare(rgb, 24).permute(1, 2, 0).contiguous().numpy().astype("<f4").tofile(
         os.path.join(out, "png.f32"))
     write_bev_cases(out, rng)
+    write_points_cases(out, rng)
     return len(lines)
 
 
@@ -97,4 +98,36 @@ def write_bev_cases(out: str, rng):
         bev_histogram(pts, grid, bev).astype("<f4").tofile(os.path.join(out, f"bev_{k}.f32"))
         lines.append(f"bev_{k} {grid} {cell!r} {x0!r} {y0!r} {thr!r} {clip!r}")
     with open(os.path.join(out, "bev.txt"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def write_points_cases(out: str, rng):
+    """Scans and the raw-points input the training makes of them (lidar_points.py):
+    points_<k>.bin (KITTI), points_<k>.f32 ([samples][6]), a line in points.txt:
+    name samples crop_radius_m coord_scale_m enough(0/1). Cases: a street scene
+    with points beyond the crop; exact duplicates and points on the crop
+    circle; fewer points than samples (padded, not enough); NaN and Inf points."""
+    from .lidar_points import points_features, synthetic_scene
+
+    lines = []
+    for k, (samples, radius, scale) in enumerate(((256, 20.0, 20.0), (512, 12.5, 10.0),
+                                                   (300, 20.0, 25.0), (64, 8.0, 8.0))):
+        pts = synthetic_scene(rng, n=6000 if k != 2 else 600, radius=25.0)
+        if k == 1:
+            pts[:200] = pts[200:400]  # duplicates: distance ties in the sampler
+            ang = rng.uniform(0, 2 * np.pi, 50)
+            pts[400:450, 0] = np.float32(radius) * np.cos(ang).astype(np.float32)
+            pts[400:450, 1] = np.float32(radius) * np.sin(ang).astype(np.float32)
+        if k == 2:
+            pts = pts[np.hypot(pts[:, 0], pts[:, 1]) < radius][:200]  # fewer than the samples
+        if k == 3:
+            pts[::7, 0] = np.nan
+            pts[3::11, 2] = np.inf
+        pts = pts.astype(np.float32)
+        pts.tofile(os.path.join(out, f"points_{k}.bin"))
+        cfg = dict(crop_radius_m=radius, coord_scale_m=scale)
+        f, ok = points_features(pts, samples, cfg)
+        f.astype("<f4").tofile(os.path.join(out, f"points_{k}.f32"))
+        lines.append(f"points_{k} {samples} {radius!r} {scale!r} {int(ok)}")
+    with open(os.path.join(out, "points.txt"), "w") as f:
         f.write("\n".join(lines) + "\n")

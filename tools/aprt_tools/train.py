@@ -79,6 +79,34 @@ def load_lidar_sequence(folder: str, grid: int, bev: dict):
     return imgs, pos, quat
 
 
+def load_points_sequence(folder: str, points: dict, log=print):
+    """LiDAR scans (lidar_poses.txt + KITTI .bin) as the raw-points input
+    (lidar_points.py: crop, farthest-point sampling, features): float32
+    (N, 6, samples, 1), computed once (no augmentation for LiDAR)."""
+    from .lidar_bev import read_kitti
+    from .lidar_points import points_features_many
+
+    poses = read_poses(folder, "lidar_poses.txt")
+    feats = np.zeros((len(poses), points["samples"], 6), np.float32)
+    chunk = 256
+    for a in range(0, len(poses), chunk):
+        scans = [read_kitti(os.path.join(folder, name)) for name, _, _ in poses[a:a + chunk]]
+        feats[a:a + chunk], _ = points_features_many(scans, points["samples"], points)
+        log(f"train: sampled {min(a + chunk, len(poses))}/{len(poses)} scans")
+    x = torch.from_numpy(feats).permute(0, 2, 1).unsqueeze(-1).contiguous()
+    pos = torch.tensor(np.stack([p for _, p, _ in poses]), dtype=torch.float32)
+    quat = torch.tensor(np.stack([q / np.linalg.norm(q) for _, _, q in poses]), dtype=torch.float32)
+    return x, pos, quat
+
+
+def network_input(frames: torch.Tensor, cfg) -> torch.Tensor:
+    """What the network sees of stored frames: points as they are; images and
+    histograms stored as uint8, scaled and normalised."""
+    if cfg.points:
+        return frames
+    return normalise(frames.float() / 255.0, cfg.mean, cfg.std)
+
+
 def augment(x: torch.Tensor, gen: torch.Generator, strength: float = 1.0) -> torch.Tensor:
     """x: (N, 3, S, S) in [0, 1]; lighting and sensor changes, never geometry.
 
@@ -115,7 +143,7 @@ def evaluate(model, imgs, pos, quat, lo, hi, batch=32, mean=None, std=None):
     model.eval()
     pe, oe = [], []
     for i in range(0, len(imgs), batch):
-        x = normalise(imgs[i:i + batch].float() / 255.0, mean, std)
+        x = network_input(imgs[i:i + batch], model.cfg)
         y = model(x)
         p = y[:, :3] * (hi - lo) + lo
         for k in range(len(p)):
@@ -130,14 +158,21 @@ def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: in
           warmup_steps: int = 200, modality: str = "image", log=print):
     """modality "image": DATA's poses.txt + images at size x size; "bev": its
     lidar_poses.txt + scans as size x size BEV histograms over 32 m (the 'bev'
-    configuration's geometry at that grid), without augmentation."""
+    configuration's geometry at that grid); "points": the same scans as
+    `size` farthest-point samples through PointNet++ (the 'points'
+    configuration; size >= 1024). LiDAR without augmentation."""
     torch.manual_seed(seed)
     torch.set_num_threads(threads)
     os.makedirs(out, exist_ok=True)
     t0 = time.time()
-    cfg = AprConfig.named("bev" if modality == "bev" else "full", size)
+    cfg = AprConfig.named({"bev": "bev", "points": "points"}.get(modality, "full"), size)
     if modality == "bev":
         imgs, pos, quat = load_lidar_sequence(data, size, cfg.bev)
+    elif modality == "points":
+        from .model.pointnet2 import check_points_config
+
+        check_points_config(cfg.points)
+        imgs, pos, quat = load_points_sequence(data, cfg.points, log)
     else:
         imgs, pos, quat = load_sequence(data, size)
     log(f"train: {len(imgs)} frames from {data} loaded in {time.time() - t0:.0f} s")
@@ -179,7 +214,10 @@ def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: in
             # in from 30 % to 70 % of the budget. With full augmentation from the
             # start the position stayed at the mean for 10+ CPU-minutes.
             strength = min(1.0, max(0.0, (frac - 0.3) / 0.4)) if modality == "image" else 0.0
-            x = normalise(augment(imgs[idx].float() / 255.0, gen, strength), cfg.mean, cfg.std)
+            if cfg.points:
+                x = imgs[idx]
+            else:
+                x = normalise(augment(imgs[idx].float() / 255.0, gen, strength), cfg.mean, cfg.std)
             loss, lp, lq = loss_fn(model(x), pos_n[idx], quat[idx])
             opt.zero_grad()
             loss.backward()

@@ -16,6 +16,11 @@ constexpr OpKind kKinds[] = {
     {"ACTIVATION", 1, 1, ops::prepare_activation},
     {"CONCAT", 1, format::kMaxOpInputs, ops::prepare_concat},
     {"CROSS_ATTENTION_1Q", 7, 7, ops::prepare_cross_attention_1q},
+    {"FPS", 1, 1, ops::prepare_fps},
+    {"BALL_GROUP", 2, 3, ops::prepare_ball_group},
+    {"GROUP_MAX", 1, 1, ops::prepare_group_max},
+    {"THREE_INTERP", 3, 3, ops::prepare_three_interp},
+    {"GRID_TOKENS", 2, 2, ops::prepare_grid_tokens},
 };
 static_assert(sizeof(kKinds) / sizeof(kKinds[0]) == format::kMaxOpCode);
 

@@ -19,5 +19,11 @@ Status prepare_attention(OpNode& node);
 Status prepare_activation(OpNode& node);
 Status prepare_concat(OpNode& node);
 Status prepare_cross_attention_1q(OpNode& node);
+// The raw-points modality (point_ops.cc).
+Status prepare_fps(OpNode& node);
+Status prepare_ball_group(OpNode& node);
+Status prepare_group_max(OpNode& node);
+Status prepare_three_interp(OpNode& node);
+Status prepare_grid_tokens(OpNode& node);
 
 }  // namespace aprt::ops

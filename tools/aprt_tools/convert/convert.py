@@ -70,8 +70,10 @@ def build_meta(eg, source: bytes, source_name: str, config: dict | None, overrid
                 input_shape=list(inp.shape))
     meta.update(_infer_architecture(eg))
     if config:
-        meta.update(modality=spec.MODALITY_IMAGE if config.get("in_channels", 3) == 3
-                    else spec.MODALITY_LIDAR_BEV,
+        modality = (spec.MODALITY_LIDAR_POINTS if config.get("points") else
+                    spec.MODALITY_IMAGE if config.get("in_channels", 3) == 3 else
+                    spec.MODALITY_LIDAR_BEV)
+        meta.update(modality=modality,
                     norm_mean=list(config["mean"]), norm_std=list(config["std"]),
                     pose_min=list(config["pose_min"]), pose_max=list(config["pose_max"]),
                     backbone=config["backbone"], dim_feedforward=config["dim_feedforward"],
@@ -86,6 +88,10 @@ def build_meta(eg, source: bytes, source_name: str, config: dict | None, overrid
             from ..lidar_bev import bev_meta
 
             meta["bev"] = bev_meta(config["bev"])
+        if config.get("points"):
+            from ..lidar_points import points_meta
+
+            meta["points"] = points_meta(config["points"])
         if "val_error" in config.get("extra", {}):
             meta["val_error"] = list(config["extra"]["val_error"])
     meta.setdefault("modality", spec.MODALITY_IMAGE)

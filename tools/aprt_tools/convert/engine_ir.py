@@ -150,6 +150,42 @@ def quantised_dwconv(op: Op, ins: list) -> np.ndarray:
     return activation(acc * _mult(op, w) + ins[2], p.get("act", 0))
 
 
+def _xyz(x: np.ndarray, t: Tensor) -> torch.Tensor:
+    """The first three columns of a row tensor, as point_ops' (1, 3, N, 1) float32."""
+    rows = np.asarray(x).reshape(-1, t.shape[-1])[:, :3].astype(np.float32)
+    return torch.from_numpy(np.ascontiguousarray(rows.T))[None, :, :, None]
+
+
+def _feats(x: np.ndarray, t: Tensor) -> torch.Tensor:
+    rows = np.asarray(x).reshape(-1, t.shape[-1]).astype(np.float32)
+    return torch.from_numpy(np.ascontiguousarray(rows.T))[None, :, :, None]
+
+
+def point_op(op: Op, ins: list) -> np.ndarray:
+    """The PointNet++ ops: model/point_ops.py is their definition (float32)."""
+    from ..model import point_ops as po
+
+    c, p, t = op.code, op.params, op.inputs
+    with torch.no_grad():
+        if c == spec.OP_FPS:
+            s = int(np.prod(op.outputs[0].shape[:-1]))
+            y = po.fps_plain(_xyz(ins[0], t[0]), s)[0, :, :, 0].T
+        elif c == spec.OP_BALL_GROUP:
+            k = op.outputs[0].shape[-2]
+            f = None if t[2] is None else _feats(ins[2], t[2])
+            y = po.ball_group_plain(_xyz(ins[0], t[0]), _xyz(ins[1], t[1]), f, p["radius"], k)
+            y = y[0].permute(1, 2, 0)
+        elif c == spec.OP_THREE_INTERP:
+            y = po.three_interpolate_plain(_xyz(ins[0], t[0]), _xyz(ins[1], t[1]),
+                                           _feats(ins[2], t[2]))[0, :, :, 0].T
+        elif c == spec.OP_GRID_TOKENS:
+            y = po.grid_tokens_plain(_xyz(ins[0], t[0]), _feats(ins[1], t[1]), p["groups"],
+                                     p["gx"], p["gy"])[0].permute(1, 2, 0)
+        else:
+            raise ValueError(f"no semantics for op {op}")
+    return y.numpy().astype(np.float64)
+
+
 def run_op(op: Op, get) -> list:
     """Evaluate one op in float64; `get(tensor)` returns an input's value."""
     p = op.params
@@ -221,6 +257,11 @@ def run_op(op: Op, get) -> list:
     elif c == spec.OP_CONCAT:
         m = int(np.prod(op.outputs[0].shape[:-1]))
         y = np.concatenate([x.reshape(m, -1) for x in ins], axis=1)
+    elif c == spec.OP_GROUP_MAX:
+        x = ins[0]
+        y = x.reshape(-1, x.shape[-2], x.shape[-1]).max(axis=1)
+    elif c in (spec.OP_FPS, spec.OP_BALL_GROUP, spec.OP_THREE_INTERP, spec.OP_GRID_TOKENS):
+        y = point_op(op, ins)
     else:
         raise ValueError(f"no semantics for op {op}")
     return [y.reshape(op.outputs[0].shape)]

@@ -284,9 +284,83 @@ class Lowering:
         self.emit(spec.OP_ATTENTION, node, [q, k, v], [y], heads=heads,
                   scale=float(node.params["scale"]))
 
+    # -- the points modality's ops (model/point_ops.py; FORMAT.md "Point ops") --
+    def xyz_operand(self, node: Node, name: str) -> Tensor:
+        """Coordinates (1, 3, N, 1) that are the first three columns of an engine
+        tensor's rows (the input's features, or an op's [N, 3] output)."""
+        shape = self.g.shape(name)
+        if len(shape) != 4 or shape[0] != 1 or shape[1] != 3 or shape[3] != 1:
+            self.fail(node, f"coordinates {name!r} have shape {shape}, not (1, 3, N, 1)")
+        t, idx = self.get(node, name)
+        width = t.shape[-1]
+        n = shape[2]
+        want = (np.arange(n)[None, :] * width + np.arange(3)[:, None])[None, :, :, None]
+        if width < 3 or t.numel != n * width or not np.array_equal(idx, want):
+            self.fail(node, f"coordinates {name!r} are not the first three columns of a row "
+                            "tensor; the engine would need a copy it does not have")
+        return t
+
+    def nchw_operand(self, node: Node, name: str) -> Tensor:
+        n, c, h, w = self.g.shape(name)
+        return self.need(node, name, nhwc_view(n, c, h, w), "NHWC")
+
+    def nhwc_out(self, node: Node, name: str | None = None) -> Tensor:
+        name = name or node.outputs[0]
+        n, c, h, w = self.g.shape(name)
+        y = self.act_tensor(name, (1, h, w, c))
+        self.view[name] = (y, nhwc_view(1, c, h, w))
+        return y
+
+    def op_FarthestPointSample(self, node: Node):
+        x = self.xyz_operand(node, node.inputs[0])
+        if int(node.attrs["count"]) > x.numel // x.shape[-1]:
+            self.fail(node, f"samples {node.attrs['count']} of {x.numel // x.shape[-1]} points")
+        self.emit(spec.OP_FPS, node, [x], [self.nhwc_out(node)])
+
+    def op_BallGroup(self, node: Node):
+        p = self.xyz_operand(node, node.inputs[0])
+        c = self.xyz_operand(node, node.inputs[1])
+        f = self.nchw_operand(node, node.inputs[2]) if len(node.inputs) > 2 and node.inputs[2] \
+            else None
+        self.emit(spec.OP_BALL_GROUP, node, [p, c, f], [self.nhwc_out(node)],
+                  radius=float(node.attrs["radius"]))
+
+    def op_ThreeInterpolate(self, node: Node):
+        t = self.xyz_operand(node, node.inputs[0])
+        k = self.xyz_operand(node, node.inputs[1])
+        f = self.nchw_operand(node, node.inputs[2])
+        self.emit(spec.OP_THREE_INTERP, node, [t, k, f], [self.nhwc_out(node)])
+
+    def op_GridTokens(self, node: Node):
+        p = self.xyz_operand(node, node.inputs[0])
+        f = self.nchw_operand(node, node.inputs[1])
+        a = node.attrs
+        self.emit(spec.OP_GRID_TOKENS, node, [p, f], [self.nhwc_out(node)],
+                  groups=int(a["groups"]), gx=int(a["gx"]), gy=int(a["gy"]))
+
+    def op_ReduceMax(self, node: Node):
+        """Max over the neighbours of a grouped map (1, C, S, K) -> (1, C, S, 1)."""
+        axes = node.attrs.get("axes")
+        if axes is None and len(node.inputs) > 1 and node.inputs[1]:
+            axes = self.g.const(node.inputs[1])
+        shape = self.g.shape(node.inputs[0])
+        axes = None if axes is None else [int(a) % len(shape) for a in np.asarray(axes).reshape(-1)]
+        if len(shape) != 4 or axes != [3] or not node.attrs.get("keepdims", 1):
+            self.fail(node, "only a max over the last axis of a (1, C, S, K) map is supported")
+        x = self.nchw_operand(node, node.inputs[0])
+        self.emit(spec.OP_GROUP_MAX, node, [x], [self.nhwc_out(node)])
+
     def op_Concat_compute(self, node: Node):
         g = self.g
-        axis = int(node.attrs["axis"]) % len(g.shape(node.outputs[0]))
+        rank = len(g.shape(node.outputs[0]))
+        axis = int(node.attrs["axis"]) % rank
+        if rank == 4 and axis == 1 and all(not g.is_const(i) for i in node.inputs):
+            # channels of NHWC maps: a row-wise concatenation of their [H*W, C] rows
+            if len(node.inputs) > spec.MAX_OP_INPUTS:
+                self.fail(node, "concatenation inputs must be at most 8 dynamic tensors")
+            ins = [self.nchw_operand(node, i) for i in node.inputs]
+            self.emit(spec.OP_CONCAT, node, ins, [self.nhwc_out(node)])
+            return
         if axis != len(g.shape(node.outputs[0])) - 1:
             self.fail(node, "concatenation of separate tensors is only supported on the last axis")
         if any(g.is_const(i) for i in node.inputs) or len(node.inputs) > spec.MAX_OP_INPUTS:

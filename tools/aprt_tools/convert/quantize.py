@@ -93,27 +93,34 @@ def _prepare_image(path: str, meta: dict) -> np.ndarray:
 
 
 def _lidar_inputs(folder: str, meta: dict, limit: int) -> list:
-    """A LiDAR sequence (lidar_poses.txt + scans) as the BEV model's inputs."""
+    """A LiDAR sequence (lidar_poses.txt + scans) as a LiDAR model's inputs: BEV
+    histograms or sampled points, with the model's own geometry."""
     from ..dataset import read_poses
     from ..lidar_bev import BEV_KEYS, bev_histogram, read_kitti
+    from ..lidar_points import POINTS_KEYS, points_features
 
-    if "bev" not in meta:
-        raise CalibrationError("calibration: a LiDAR sequence calibrates a BEV model only; this "
-                               "model has no 'bev' geometry")
+    if "bev" not in meta and "points" not in meta:
+        raise CalibrationError("calibration: a LiDAR sequence calibrates a LiDAR model only; this "
+                               "model has neither 'bev' nor 'points' geometry")
     try:
         names = [n for n, _, _ in read_poses(folder, "lidar_poses.txt")]
     except ValueError as e:
         raise CalibrationError(f"calibration: {e}") from None
-    bev = dict(zip(BEV_KEYS, meta["bev"]))
-    grid = meta["input_shape"][1]
+    bev = dict(zip(BEV_KEYS, meta["bev"])) if "bev" in meta else None
+    grid = meta["input_shape"][1]  # BEV: the grid side; points: the sample count
     mean = np.asarray(meta["norm_mean"], np.float32)
     std = np.asarray(meta["norm_std"], np.float32)
     out = []
     for i in np.unique(np.linspace(0, len(names) - 1, min(limit, len(names))).astype(int)):
         try:
-            h = bev_histogram(read_kitti(os.path.join(folder, names[i])), grid, bev)
+            scan = read_kitti(os.path.join(folder, names[i]))
         except (OSError, ValueError) as e:
             raise CalibrationError(f"calibration: {e}") from None
+        if "points" in meta:  # [1, N, 1, 6]
+            f, _ = points_features(scan, grid, dict(zip(POINTS_KEYS, meta["points"])), mean, std)
+            out.append(f[None, :, None, :].astype(np.float32))
+            continue
+        h = bev_histogram(scan, grid, bev)
         out.append(((h - mean) / std)[None].astype(np.float32))
     return out
 
@@ -123,10 +130,11 @@ def load_calibration(path: str, meta: dict, limit: int) -> list:
     shape = tuple(meta["input_shape"])
     if not os.path.exists(path):
         raise CalibrationError(f"calibration: {path} does not exist")
-    if os.path.isdir(path) and meta.get("modality") == spec.MODALITY_LIDAR_BEV:
+    if os.path.isdir(path) and meta.get("modality") in (spec.MODALITY_LIDAR_BEV,
+                                                        spec.MODALITY_LIDAR_POINTS):
         if not os.path.exists(os.path.join(path, "lidar_poses.txt")):
-            raise CalibrationError(f"calibration: {path} has no lidar_poses.txt (a BEV model "
-                                   "calibrates on LiDAR scans, or on a .npy of histograms)")
+            raise CalibrationError(f"calibration: {path} has no lidar_poses.txt (a LiDAR model "
+                                   "calibrates on LiDAR scans, or on a .npy of its inputs)")
         return _lidar_inputs(path, meta, limit)
     if os.path.isdir(path):
         files = _image_files(path)

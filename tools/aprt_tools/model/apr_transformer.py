@@ -1,8 +1,10 @@
-"""APR-Transformer, image modality (DESIGN.md section 4.1).
+"""APR-Transformer, image modality (DESIGN.md section 4.1), and the same
+network on LiDAR: a BEV histogram through the image trunk (4.2) or raw points
+through PointNet++ (4.3, model/pointnet2.py).
 
 Two branches share one EfficientNet trunk: the stride-16 map (reduction_4)
 feeds the position transformer, the stride-8 map (reduction_3) the
-orientation transformer. Each branch decodes one learned query; an MLP head
+orientation transformer; a points model feeds both its grid tokens. Each branch decodes one learned query; an MLP head
 regresses (x, y, z) min-max normalised and (qw, qx, qy, qz) unnormalised.
 The state_dict keys equal upstream's (GT-ARC/APR-Transformer).
 """
@@ -18,6 +20,7 @@ from torch import nn
 from torch.nn import functional as F
 
 from .efficientnet import EfficientNet
+from .pointnet2 import PointTokenEmbedding, PointTrunk, points_config
 from .transformer import Transformer
 
 IMAGENET_MEAN = (0.485, 0.456, 0.406)
@@ -46,6 +49,9 @@ class AprConfig:
     # LiDAR BEV models (in_channels 2): the histogram's geometry, keys of
     # lidar_bev.BEV_KEYS; the grid is image_size. None for camera models.
     bev: dict | None = None
+    # LiDAR raw-points models (in_channels 6): crop, sampling, PointNet++
+    # levels and tokens (pointnet2.points_config). None for the others.
+    points: dict | None = None
     extra: dict = field(default_factory=dict)
 
     @staticmethod
@@ -54,9 +60,12 @@ class AprConfig:
         'bev' and 'tiny-bev' are the same networks on the LiDAR BEV histogram
         (DESIGN.md 4.2: 2 channels; 256 x 256 cells of 0.125 m, TransFuser's
         32 m square centred on the sensor, split 0.5 m above the ground for a
-        sensor 1.9 m up, counts clipped at 5)."""
+        sensor 1.9 m up, counts clipped at 5); 'points' and 'tiny-points' the
+        raw-points modality (4.3: 20 m crop, 4096 points, PointNet++)."""
         bev = name.endswith("bev")
-        base = {"bev": "full", "tiny-bev": "tiny"}.get(name, name)
+        pts = name.endswith("points")
+        base = {"bev": "full", "tiny-bev": "tiny", "points": "full",
+                "tiny-points": "tiny"}.get(name, name)
         if base == "full":
             cfg = AprConfig()
         elif base == "tiny":
@@ -65,7 +74,8 @@ class AprConfig:
             cfg = AprConfig(hidden_dim=32, nheads=8, dim_feedforward=32, enc_layers=1,
                             dec_layers=1, image_size=64)
         else:
-            raise ValueError(f"unknown configuration {name!r} (full, tiny, bev, tiny-bev)")
+            raise ValueError(f"unknown configuration {name!r} (full, tiny, bev, tiny-bev, points, "
+                             "tiny-points)")
         if image_size is not None:
             cfg.image_size = image_size
         if bev:  # the grid is the input side; it always spans 32 m
@@ -74,7 +84,21 @@ class AprConfig:
             cfg.mean, cfg.std = (0.0, 0.0), (1.0, 1.0)  # histogram values are in [0, 1]
             cfg.bev = dict(cell_m=32.0 / cfg.image_size, x_min=-16.0, y_min=-16.0,
                            height_threshold_m=-1.4, clip_count=5.0)
+        if pts:  # the input is N points x 6 features; image_size is N
+            cfg.points = points_config(tiny=base == "tiny")
+            if image_size is not None:
+                cfg.points["samples"] = image_size
+            cfg.image_size = cfg.points["samples"]
+            cfg.in_channels = 6
+            cfg.backbone = "pointnet2"
+            cfg.mean, cfg.std = (0.0,) * 6, (1.0,) * 6
         return cfg
+
+    def input_shape(self) -> tuple:
+        """(1, C, H, W) of the network's input: the image, or (1, 6, N, 1) points."""
+        if self.points:
+            return (1, self.in_channels, self.points["samples"], 1)
+        return (1, self.in_channels, self.image_size, self.image_size)
 
     def to_json(self) -> str:
         return json.dumps(dataclasses.asdict(self), indent=1)
@@ -141,9 +165,16 @@ class AprTransformer(nn.Module):
     def __init__(self, cfg: AprConfig):
         super().__init__()
         self.cfg = cfg
-        self.backbone = Joiner(Backbone(cfg), PositionEmbeddingLearned(cfg.pos_embed_cells,
-                                                                      cfg.hidden_dim))
-        ch_rot, ch_t = self.backbone[0].body.endpoint_channels()
+        if cfg.points:
+            t = cfg.points["tokens"]
+            self.backbone = Joiner(PointTrunk(cfg.points),
+                                   PointTokenEmbedding(t["groups"], t["gx"], t["gy"],
+                                                       cfg.hidden_dim))
+            ch_rot = ch_t = self.backbone[0].body.out_channels
+        else:
+            self.backbone = Joiner(Backbone(cfg), PositionEmbeddingLearned(cfg.pos_embed_cells,
+                                                                          cfg.hidden_dim))
+            ch_rot, ch_t = self.backbone[0].body.endpoint_channels()
 
         def transformer():
             return Transformer(cfg.hidden_dim, cfg.nheads, cfg.enc_layers, cfg.dec_layers,
@@ -159,8 +190,12 @@ class AprTransformer(nn.Module):
         self.regressor_head_rot = nn.Sequential(PoseRegressor(cfg.hidden_dim, 4, cfg.head_dim))
 
     def forward(self, img: torch.Tensor) -> torch.Tensor:
-        """img: (N, C, S, S), already normalised. Returns (N, 7): x y z qw qx qy qz."""
-        r3, r4 = self.backbone[0].body.endpoints(img)
+        """img: (N, C, S, S), already normalised, or points (N, 6, P, 1). Returns
+        (N, 7): x y z qw qx qy qz."""
+        if self.cfg.points:
+            r3 = r4 = self.backbone[0](img)
+        else:
+            r3, r4 = self.backbone[0].body.endpoints(img)
         pos_embed = self.backbone[1]
         hs_t = self.transformer_t(self.input_proj_t(r4), pos_embed(r4), self.query_embed_t.weight)
         hs_rot = self.transformer_rot(self.input_proj_rot(r3), pos_embed(r3),

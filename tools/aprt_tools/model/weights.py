@@ -21,6 +21,28 @@ def smooth_images(n: int, channels: int, size: int, generator: torch.Generator) 
     return img + 0.3 * torch.randn(n, channels, size, size, generator=generator)
 
 
+def point_inputs(n: int, cfg, generator: torch.Generator) -> torch.Tensor:
+    """(n, 6, N, 1) network inputs of street-like synthetic scans, made by the
+    runtime's preprocessing (lidar_points.py)."""
+    import numpy as np
+
+    from ..lidar_points import points_features, synthetic_scene
+
+    rng = np.random.default_rng(int(torch.randint(0, 2**31 - 1, (1,), generator=generator)))
+    xs = []
+    for _ in range(n):
+        f, _ = points_features(synthetic_scene(rng), cfg.points["samples"], cfg.points)
+        xs.append(torch.from_numpy(f.T.copy())[:, :, None])
+    return torch.stack(xs)
+
+
+def sample_inputs(n: int, cfg, generator: torch.Generator) -> torch.Tensor:
+    """Inputs that look like the modality's: smooth images or preprocessed scans."""
+    if cfg.points:
+        return point_inputs(n, cfg, generator)
+    return smooth_images(n, cfg.in_channels, cfg.image_size, generator)
+
+
 @torch.no_grad()
 def vary(model: nn.Module, seed: int, batches: int = 4, batch_size: int = 4) -> nn.Module:
     gen = torch.Generator().manual_seed(seed)
@@ -41,6 +63,6 @@ def vary(model: nn.Module, seed: int, batches: int = 4, batch_size: int = 4) -> 
     model.train()
     cfg = model.cfg
     for _ in range(batches):
-        model(smooth_images(batch_size, cfg.in_channels, cfg.image_size, gen))
+        model(sample_inputs(batch_size, cfg, gen))
     model.eval()
     return model

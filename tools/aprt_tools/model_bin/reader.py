@@ -39,6 +39,10 @@ def _params(code: int, raw: list) -> dict:
         return dict(heads=raw[0], scale=_f(raw[1]))
     if code == spec.OP_ACTIVATION:
         return dict(act=raw[0])
+    if code == spec.OP_BALL_GROUP:
+        return dict(radius=_f(raw[0]))
+    if code == spec.OP_GRID_TOKENS:
+        return dict(groups=raw[0], gx=raw[1], gy=raw[2])
     return {}
 
 

@@ -6,7 +6,7 @@ tests/tools/test_spec_agreement.py checks that the two agree.
 
 MAGIC = b"APRTMDL\x00"
 VERSION_MAJOR = 1
-VERSION_MINOR = 1  # 1.1 adds int8 LINEAR weights and 'quantization'
+VERSION_MINOR = 2  # 1.1: int8 weights, 'quantization'; 1.2: the PointNet++ ops, 'points'
 HEADER_BYTES = 64
 SECTION_ENTRY_BYTES = 32
 TENSOR_ENTRY_BYTES = 64
@@ -46,10 +46,18 @@ OP_ATTENTION = 7
 OP_ACTIVATION = 8
 OP_CONCAT = 9
 OP_CROSS_ATTENTION_1Q = 10
+# 1.2: the raw-points modality (PointNet++; FORMAT.md "Point ops")
+OP_FPS = 11
+OP_BALL_GROUP = 12
+OP_GROUP_MAX = 13
+OP_THREE_INTERP = 14
+OP_GRID_TOKENS = 15
 OP_NAMES = {OP_CONV2D: "CONV2D", OP_DWCONV2D: "DWCONV2D", OP_LINEAR: "LINEAR",
             OP_SQUEEZE_EXCITE: "SQUEEZE_EXCITE", OP_ADD: "ADD", OP_LAYERNORM: "LAYERNORM",
             OP_ATTENTION: "ATTENTION", OP_ACTIVATION: "ACTIVATION", OP_CONCAT: "CONCAT",
-            OP_CROSS_ATTENTION_1Q: "CROSS_ATTENTION_1Q"}
+            OP_CROSS_ATTENTION_1Q: "CROSS_ATTENTION_1Q", OP_FPS: "FPS",
+            OP_BALL_GROUP: "BALL_GROUP", OP_GROUP_MAX: "GROUP_MAX",
+            OP_THREE_INTERP: "THREE_INTERP", OP_GRID_TOKENS: "GRID_TOKENS"}
 
 ACT_NONE, ACT_SILU, ACT_GELU, ACT_SIGMOID, ACT_RELU = 0, 1, 2, 3, 4
 
@@ -77,6 +85,8 @@ META_KEYS = {
     42: (T_STR, "quantization"),  # JSON: method, calibration set, per-op policy
     # LiDAR BEV (modality 2): cell_m, x_min, y_min, height_threshold_m, clip_count
     50: (T_F32, "bev"),
+    # LiDAR points (modality 3): crop_radius_m, coord_scale_m
+    51: (T_F32, "points"),
 }
 META_BY_NAME = {name: (key, typ) for key, (typ, name) in META_KEYS.items()}
 META_REQUIRED = ("producer", "source_sha256", "modality", "input_shape", "norm_mean", "norm_std",

@@ -80,6 +80,10 @@ def _op_params(op) -> list:
         return [p["heads"], f(p["scale"])]
     if c == spec.OP_ACTIVATION:
         return [p["act"]]
+    if c == spec.OP_BALL_GROUP:
+        return [f(p["radius"])]
+    if c == spec.OP_GRID_TOKENS:
+        return [p["groups"], p["gx"], p["gy"]]
     return []
 
 

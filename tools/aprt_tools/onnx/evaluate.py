@@ -275,6 +275,29 @@ OPS = {
 }
 
 
+def _point_op(fn):
+    """An 'aprt' domain node (model/point_ops.py) through its torch definition."""
+    def run(a, *xs):
+        from ..model import point_ops
+
+        ts = [None if x is None else torch.from_numpy(np.ascontiguousarray(x, np.float32))
+              for x in xs]
+        with torch.no_grad():
+            return fn(point_ops, a, *ts).numpy()
+    return run
+
+
+# The custom domain of points models' exports (tools/aprt_tools/model/point_ops.py).
+APRT_OPS = {
+    "FarthestPointSample": _point_op(lambda o, a, x: o.fps_plain(x, int(a["count"]))),
+    "BallGroup": _point_op(lambda o, a, x, c, f=None: o.ball_group_plain(
+        x, c, f, float(a["radius"]), int(a["nsample"]))),
+    "ThreeInterpolate": _point_op(lambda o, a, t, k, f: o.three_interpolate_plain(t, k, f)),
+    "GridTokens": _point_op(lambda o, a, x, f: o.grid_tokens_plain(
+        x, f, int(a["groups"]), int(a["gx"]), int(a["gy"]))),
+}
+
+
 def constant_value(node: onnx.NodeProto) -> np.ndarray:
     a = attrs_of(node)
     if "value" in a:
@@ -292,8 +315,8 @@ def run_node(node: onnx.NodeProto, inputs: list) -> list:
     """Evaluate one node; `inputs` holds numpy arrays (None for omitted inputs)."""
     if node.op_type == "Constant":
         return [constant_value(node)]
-    fn = OPS.get(node.op_type)
-    if node.op_type not in OPS or node.domain not in ("", "ai.onnx"):
+    fn = APRT_OPS.get(node.op_type) if node.domain == "aprt" else OPS.get(node.op_type)
+    if fn is None and node.op_type != "Split" or node.domain not in ("", "ai.onnx", "aprt"):
         raise UnsupportedOnnx(f"node {node.name!r}: operator {node.op_type!r} is not supported")
     a = attrs_of(node)
     if node.op_type == "Split":
