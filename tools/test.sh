@@ -52,9 +52,10 @@ case "${1:-}" in
     # synthetic drive) come from the default run's build.
     cmake --preset asan >/dev/null
     cmake --build --preset asan -j "$jobs" --target aprt_synth >/dev/null
-    ctest --preset asan -R 'run\.replay\.generate' --timeout 600 >/dev/null
+    ctest --preset asan -R 'run\.(replay|lidar)\.generate' --timeout 600 >/dev/null
     TSAN_OPTIONS="halt_on_error=1 suppressions=$PWD/tests/tsan.supp" \
-      APRT_RUN_FIXTURES="$PWD/build/asan" build/tsan/bin/run_loop_tests --gtest_filter='RunLoop.*:MultiCamera.*'
+      APRT_RUN_FIXTURES="$PWD/build/asan" build/tsan/bin/run_loop_tests \
+      --gtest_filter='RunLoop.*:MultiCamera.*:LidarLoop.*'
     # (FaultInjection.* is timing-driven by design; it runs in the default step.)
     ;;
   --aarch64)

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "kernels/common/pointnet_fast.h"
+
 namespace aprt::kernels {
 
 void lidar_bev_histogram(const LidarPoint* p, size_t n, const BevParams& b, uint16_t* counts,
@@ -33,41 +35,10 @@ bool lidar_fps(const LidarPoint* p, size_t n, size_t count, uint32_t* idx, float
     std::memset(idx, 0, count * sizeof(uint32_t));
     return false;
   }
-  float* __restrict xs = scratch;
-  float* __restrict ys = scratch + n;
-  float* __restrict zs = scratch + 2 * n;
-  float* __restrict dist = scratch + 3 * n;
-  for (size_t i = 0; i < n; ++i) {
-    xs[i] = p[i].x;
-    ys[i] = p[i].y;
-    zs[i] = p[i].z;
-    dist[i] = INFINITY;
-  }
+  // The engine's FPS (structure of arrays) on rows of 4 floats, then the padding.
   const size_t take = n < count ? n : count;
-  uint32_t last = 0;
-  idx[0] = 0;
-  for (size_t s = 1; s < take; ++s) {
-    const float cx = xs[last], cy = ys[last], cz = zs[last];
-    float best = -1.0f;
-    // Update and maximum: both vectorise (min and max are exact, so the
-    // reduction's order does not matter; -fopenmp-simd, no OpenMP runtime).
-    // (GCC; clang does not vectorise this form and -Werror would make its
-    // note fatal, so it gets the plain loop.)
-#if !defined(__clang__)
-#pragma omp simd reduction(max : best)
-#endif
-    for (size_t i = 0; i < n; ++i) {
-      const float dx = xs[i] - cx, dy = ys[i] - cy, dz = zs[i] - cz;
-      const float d = dx * dx + dy * dy + dz * dz;
-      const float m = d < dist[i] ? d : dist[i];
-      dist[i] = m;
-      best = m > best ? m : best;
-    }
-    // The first index holding it: the reference's tie rule.
-    size_t arg = 0;
-    while (dist[arg] != best) ++arg;
-    idx[s] = last = uint32_t(arg);
-  }
+  f32_points_to_soa(&p[0].x, 4, n, scratch);
+  f32_fps_soa(scratch, n, take, idx, scratch + 3 * n);
   for (size_t s = take; s < count; ++s) idx[s] = idx[s - take];
   return n >= count;
 }

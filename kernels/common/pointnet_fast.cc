@@ -77,6 +77,13 @@ void f32_ball_group_soa(const float* soa, size_t n, const float* centres, size_t
     for (size_t i0 = 0; i0 < n && found < k; i0 += kBlock) {
       const size_t m = n - i0 < kBlock ? n - i0 : kBlock;
       block_dist(xs, ys, zs, i0, m, c[0], c[1], c[2], d);
+      // Most blocks hold no neighbour of a small ball: a vector count skips them.
+      int hits = 0;
+#if !defined(__clang__)
+#pragma omp simd reduction(+ : hits)
+#endif
+      for (size_t i = 0; i < m; ++i) hits += d[i] < r2 ? 1 : 0;
+      if (hits == 0) continue;
       for (size_t i = 0; i < m && found < k; ++i) {
         if (!(d[i] < r2)) continue;
         const size_t p = i0 + i;
@@ -100,16 +107,23 @@ void f32_ball_group_soa(const float* soa, size_t n, const float* centres, size_t
 }
 
 void f32_group_max(int k, int c, const float* x, float* y, int s0, int s1) {
+  // 64 channels at a time, their maxima kept in registers across the k rows.
+  constexpr int kTile = 64;
   for (int s = s0; s < s1; ++s) {
     const float* __restrict g = x + size_t(s) * size_t(k) * size_t(c);
     float* __restrict o = y + size_t(s) * size_t(c);
-    std::memcpy(o, g, size_t(c) * sizeof(float));
-    for (int j = 1; j < k; ++j) {
-      const float* __restrict r = g + size_t(j) * size_t(c);
+    for (int f0 = 0; f0 < c; f0 += kTile) {
+      const int w = c - f0 < kTile ? c - f0 : kTile;
+      alignas(64) float acc[kTile];
+      for (int f = 0; f < w; ++f) acc[f] = g[f0 + f];
+      for (int j = 1; j < k; ++j) {
+        const float* __restrict r = g + size_t(j) * size_t(c) + f0;
 #if !defined(__clang__)
 #pragma omp simd
 #endif
-      for (int f = 0; f < c; ++f) o[f] = o[f] < r[f] ? r[f] : o[f];
+        for (int f = 0; f < w; ++f) acc[f] = acc[f] < r[f] ? r[f] : acc[f];
+      }
+      for (int f = 0; f < w; ++f) o[f0 + f] = acc[f];
     }
   }
 }

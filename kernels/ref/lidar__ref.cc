@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "kernels/ref/pointnet__ref.h"
+
 namespace aprt::kernels {
 
 void lidar_bev_histogram__ref(const LidarPoint* p, size_t n, const BevParams& b, float* out) {
@@ -35,25 +37,9 @@ bool lidar_fps__ref(const LidarPoint* p, size_t n, size_t count, uint32_t* idx, 
     std::memset(idx, 0, count * sizeof(uint32_t));
     return false;
   }
+  // The engine's FPS on rows of 4 floats (x y z intensity), then the padding.
   const size_t take = n < count ? n : count;
-  for (size_t i = 0; i < n; ++i) dist[i] = INFINITY;
-  uint32_t last = 0;
-  idx[0] = 0;
-  for (size_t s = 1; s < take; ++s) {
-    const LidarPoint& c = p[last];
-    float best = -1.0f;
-    uint32_t arg = 0;
-    for (size_t i = 0; i < n; ++i) {
-      const float dx = p[i].x - c.x, dy = p[i].y - c.y, dz = p[i].z - c.z;
-      const float d = dx * dx + dy * dy + dz * dz;
-      if (d < dist[i]) dist[i] = d;
-      if (dist[i] > best) {
-        best = dist[i];
-        arg = uint32_t(i);
-      }
-    }
-    idx[s] = last = arg;
-  }
+  f32_fps__ref(&p[0].x, 4, n, take, idx, dist);
   for (size_t s = take; s < count; ++s) idx[s] = idx[s - take];
   return n >= count;
 }

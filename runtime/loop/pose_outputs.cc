@@ -171,8 +171,8 @@ void PoseOutputs::publish_status(const StatusSnapshot& s, int64_t realtime_ns) n
   static const char* const kKeys[kCount] = {
       "state",          "reason",       "poses", "flagged",       "last_flags",  "deadline_misses",
       "frames_skipped", "inference_ms", "can",   "can_estimates", "can_dropped", "can_problem"};
-  // Multi-camera runs add "fusion" and one "camera NAME" per camera.
-  constexpr int kMax = kCount + 1 + 8;
+  // Multi-camera runs add "fusion" and one "camera NAME" per camera; LiDAR runs "lidar".
+  constexpr int kMax = kCount + 2 + 8;
   const char* keys[kMax];
   char v[kMax][48];
   for (int i = 0; i < kCount; ++i) keys[i] = kKeys[i];
@@ -199,6 +199,12 @@ void PoseOutputs::publish_status(const StatusSnapshot& s, int64_t realtime_ns) n
     std::snprintf(v[kCanProblem], sizeof v[0], "%s", can_off_reason_.c_str());
   }
   int count = kCount;
+  if (s.lidar) {
+    keys[count] = "lidar";
+    std::snprintf(v[count++], sizeof v[0], "%u points, %u dropped, %u clipped; %llu sparse",
+                  s.scan_points, s.scan_dropped, s.scan_clipped,
+                  static_cast<unsigned long long>(s.sparse_scans));
+  }
   const FusionSummary* f = s.fusion;
   if (!camera_keys_.empty() && f) {
     keys[count] = "fusion";

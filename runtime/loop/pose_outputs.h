@@ -39,6 +39,11 @@ struct StatusSnapshot {
   uint32_t last_flags = 0;
   double last_inference_ms = 0;
   const FusionSummary* fusion = nullptr;  // the last cycle's (multi-camera runs)
+  // LiDAR runs: the last scan's points (after a points model's crop), what the
+  // point gate dropped and clipped in it, and the sparse scans so far.
+  bool lidar = false;
+  uint32_t scan_points = 0, scan_dropped = 0, scan_clipped = 0;
+  uint64_t sparse_scans = 0;
 };
 
 class PoseOutputs {

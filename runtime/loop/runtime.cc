@@ -343,8 +343,12 @@ uint32_t Runtime::scan_input(Engine& e, const FrameBuffer& f) {
   } else {
     r = kernels::lidar_bev_input(bev_input_, f.points(), n, bev_counts_.data(), e.input().f32());
   }
+  scan_points_.store(uint32_t(r.points), std::memory_order_relaxed);
+  scan_dropped_.store(f.info.scan.non_finite + f.info.scan.over_capacity,
+                      std::memory_order_relaxed);
+  scan_clipped_.store(f.info.scan.clipped, std::memory_order_relaxed);
   if (!r.enough || r.points < size_t(config_.source.lidar.min_points)) {
-    ++sparse_scans_;
+    sparse_scans_.fetch_add(1, std::memory_order_relaxed);
     return kPoseSparseScan;
   }
   return 0;
@@ -566,6 +570,13 @@ void Runtime::publish_loop() {
       st.last_flags = last_flags_.load(std::memory_order_relaxed);
       st.last_inference_ms = last_inference_ms;
       st.fusion = &last_fusion;
+      if (cameras_[0]->scans) {
+        st.lidar = true;
+        st.scan_points = scan_points_.load(std::memory_order_relaxed);
+        st.scan_dropped = scan_dropped_.load(std::memory_order_relaxed);
+        st.scan_clipped = scan_clipped_.load(std::memory_order_relaxed);
+        st.sparse_scans = sparse_scans_.load(std::memory_order_relaxed);
+      }
       outputs_->publish_status(st, realtime_ns());
     }
     if (!ring_->pop(&r)) {
@@ -773,7 +784,7 @@ int Runtime::run() {
   stats_.frames_skipped = frames_skipped_.load();
   stats_.frames_dropped = cameras_[0]->slot->dropped();
   stats_.fusion_no_quorum = fusion_no_quorum_;
-  stats_.sparse_scans = sparse_scans_;
+  stats_.sparse_scans = sparse_scans_.load();
   stats_.cameras.clear();
   for (const auto& c : cameras_) {
     stats_.cameras.push_back(

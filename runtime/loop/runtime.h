@@ -205,7 +205,9 @@ class Runtime {
   std::vector<float> scan_scratch_;
   std::vector<uint16_t> bev_counts_;
   uint32_t scan_input(Engine& e, const FrameBuffer& f);  // inference thread; returns flags
-  uint64_t sparse_scans_ = 0;
+  // LiDAR runs: what the last scan brought (for the diagnostics), sparse scans so far.
+  std::atomic<uint64_t> sparse_scans_{0};
+  std::atomic<uint32_t> scan_points_{0}, scan_dropped_{0}, scan_clipped_{0};
   void join_threads();
   int64_t started_ns_ = 0;
   std::vector<TimingRecord> timings_;

@@ -40,11 +40,11 @@ RunState Supervisor::step(const Health& h) noexcept {
   const bool outputs_failing = h.output_errors > output_errors_seen_;
   output_errors_seen_ = h.output_errors;
   if (h.source_failed) {
-    problem = "camera source failed (restarting)";
+    problem = "sensor source failed (restarting)";
   } else if (h.last_frame_ns == 0) {
     if (h.now_ns - h.started_ns > timeout) problem = "no frame received yet";
   } else if (h.now_ns - h.last_frame_ns > timeout) {
-    problem = "frames stale (camera stalled?)";
+    problem = "frames stale (sensor stalled?)";
   } else if (h.last_flags & kPoseDeadlineMissed) {
     problem = "inference deadline missed";
   } else if (h.last_flags & (kPoseNonFinite | kPoseQuatDegenerate | kPoseQuatNorm)) {

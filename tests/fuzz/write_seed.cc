@@ -1,6 +1,7 @@
 // Writes the fuzzer's seed corpus: the small every-op model from the tests,
-// and the same with int8 LINEAR and depthwise ops (so that mutations reach the
-// quantisation checks and the int8 ops' prepare).
+// the same with int8 LINEAR and depthwise ops (so that mutations reach the
+// quantisation checks and the int8 ops' prepare), and the small raw-points
+// model (the point ops' prepare and kernels, the 'points' metadata).
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -36,7 +37,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::string dir = argv[1];
-  const bool ok = write(dir + "/small_model.aprt", aprt::test::make_small_model()) &&
-                  write(dir + "/small_int8_model.aprt", aprt::test::make_small_int8_model(int8_dw));
+  const bool ok =
+      write(dir + "/small_model.aprt", aprt::test::make_small_model()) &&
+      write(dir + "/small_int8_model.aprt", aprt::test::make_small_int8_model(int8_dw)) &&
+      write(dir + "/small_points_model.aprt", aprt::test::make_small_points_model());
   return ok ? 0 : 1;
 }

@@ -223,7 +223,7 @@ TEST(FaultInjection, CameraStallDegradesAndRecovers) {
   std::vector<std::string> t;
   RunStats st;
   EXPECT_EQ(run_and_trace(c, &t, &st), 0);
-  const int d = find_in(t, "DEGRADED: frames stale (camera stalled?)");
+  const int d = find_in(t, "DEGRADED: frames stale (sensor stalled?)");
   EXPECT_GE(d, 0) << joined(t);
   EXPECT_GE(find_in(t, "RUNNING: ok", d), 0) << joined(t);
 }

@@ -207,6 +207,52 @@ TEST(Config, Libcamera) {
                  "source.libcamera.device: unknown key");
 }
 
+TEST(Config, LidarSources) {
+  auto c = parse_config(R"(
+model: points.aprt
+source:
+  type: pointcloud2
+  pointcloud2: {topic: /sensing/lidar/top/pointcloud, domain: 3, reliable: true, depth: 2}
+  lidar:
+    max_points: 150000
+    region: {x_min: -100, x_max: 100, z_min: -5, z_max: 10}
+    min_points: 500
+)",
+                        "test.yaml");
+  ASSERT_TRUE(c) << c.error().message();
+  EXPECT_TRUE(c->source.lidar_source());
+  EXPECT_EQ(c->source.pointcloud2.topic, "/sensing/lidar/top/pointcloud");
+  EXPECT_EQ(c->source.pointcloud2.domain, 3);
+  EXPECT_TRUE(c->source.pointcloud2.reliable);
+  EXPECT_EQ(c->source.pointcloud2.depth, 2);
+  EXPECT_EQ(c->source.lidar.max_points, 150000);
+  EXPECT_EQ(c->source.lidar.region[0], -100.0);
+  EXPECT_EQ(c->source.lidar.region[3], 200.0);  // y_max: the default
+  EXPECT_EQ(c->source.lidar.region[5], 10.0);
+  EXPECT_EQ(c->source.lidar.min_points, 500);
+  auto r = parse_config("model: m.aprt\nsource: {type: lidar_replay, replay: {path: /d}}\n", "t");
+  ASSERT_TRUE(r) << r.error().message();
+  EXPECT_TRUE(r->source.lidar_source());
+  expect_refused("model: m\nsource: {type: lidar_replay}\n",
+                 "source.replay.path is required for a lidar_replay source");
+  expect_refused("model: m\nsource: {type: pointcloud2, lidar: {max_points: 0}}\n",
+                 "source.lidar.max_points: expected an integer in [1, 4194304]");
+  expect_refused("model: m\nsource: {type: pointcloud2, lidar: {region: {x_min: 300}}}\n",
+                 "source.lidar.region: every axis needs min < max");
+  expect_refused("model: m\nsource: {type: pointcloud2, pointcloud2: {qos: fast}}\n",
+                 "source.pointcloud2.qos");
+  expect_refused("model: m\nsource: {type: velodyne}\n", "lidar_replay, pointcloud2");
+  expect_refused(R"(
+model: m
+cameras:
+  - name: front
+    source: {type: replay, replay: {path: /a}}
+  - name: roof
+    source: {type: pointcloud2}
+)",
+                 "cameras.roof: a LiDAR source (pointcloud2) is one sensor");
+}
+
 TEST(Config, ShippedConfigurationsParse) {
   for (const char* name : {"config/default.yaml", "config/aprt.yaml"}) {
     auto c = load_config(std::string(APRT_SOURCE_DIR) + "/" + name);

@@ -41,7 +41,7 @@ TEST(Supervisor, StaleFramesDegradeThenRecover) {
   Health h = healthy(kMs * 2000);
   h.last_frame_ns = kMs * 1000;  // 1 s old
   EXPECT_EQ(s.step(h), RunState::kDegraded);
-  EXPECT_STREQ(s.reason(), "frames stale (camera stalled?)");
+  EXPECT_STREQ(s.reason(), "frames stale (sensor stalled?)");
   EXPECT_EQ(s.step(healthy(kMs * 2100)), RunState::kRunning);
 }
 

@@ -21,7 +21,7 @@ def cmd_golden(a):
     from .model.apr_transformer import AprConfig
 
     cfg = AprConfig.named(a.config, a.size)
-    m = make_golden(cfg, a.out, seed=a.seed, opset=a.opset, count=a.count)
+    m = make_golden(cfg, a.out, seed=a.seed, opset=a.opset, count=a.count, portable=a.portable)
     shape = "x".join(str(v) for v in cfg.input_shape()[1:])
     print(f"golden: {a.config} input {shape} opset {a.opset} -> {a.out} "
           f"(relative output spread {m['min_relative_spread']:.2f})")
@@ -166,6 +166,8 @@ def main(argv=None):
     g.add_argument("--config", default="tiny", choices=CONFIGS)
     g.add_argument("--size", type=int, help="input side (default: the configuration's)")
     g.add_argument("--opset", type=int, default=13, choices=(13, 17))
+    g.add_argument("--portable", action="store_true",
+                   help="points models: also model_portable.onnx in standard ops (ONNX Runtime)")
     g.add_argument("--seed", type=int, default=1)
     g.add_argument("--count", type=int, default=3, help="number of inputs")
     g.add_argument("--convert", action="store_true", help="also write model.aprt")

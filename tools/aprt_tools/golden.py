@@ -22,13 +22,18 @@ MIN_SPREAD = 0.05  # std across inputs / mean magnitude, per output, at least
 
 
 def make_golden(cfg: AprConfig, out_dir: str, *, seed: int = 1, opset: int = 13,
-                count: int = 3) -> dict:
+                count: int = 3, portable: bool = False) -> dict:
+    """portable: also write model_portable.onnx, the points model's PointNet++
+    in standard ONNX ops (for ONNX Runtime; export.py)."""
     os.makedirs(out_dir, exist_ok=True)
     torch.manual_seed(seed)
     model = vary(AprTransformer(cfg), seed)
     onnx_bytes = export_onnx(model, opset)
     with open(os.path.join(out_dir, "model.onnx"), "wb") as f:
         f.write(onnx_bytes)
+    if portable and cfg.points:
+        with open(os.path.join(out_dir, "model_portable.onnx"), "wb") as f:
+            f.write(export_onnx(model, opset, portable=True))
     with open(os.path.join(out_dir, "model.json"), "w") as f:
         f.write(cfg.to_json())
     gen = torch.Generator().manual_seed(seed + 1000)

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """aprt against ONNX Runtime on the same exported model, same thread count.
 
 One command: installs onnxruntime-node from npm if needed (--ignore-scripts:
@@ -11,6 +11,12 @@ model is also quantised (python3 -m aprt_tools quantize, calibrated on frames
 of data/demo_drive; default policy) and aprt int8 runs in the same rounds.
 
   tools/bench/run_bench.py [--sizes 224,128] [--threads 1,2] [--rounds 5] [--runs 20] [--no-int8]
+                           [--bev] [--points]
+
+--points adds the LiDAR raw-points model (4096 points, PointNet++ and the same
+transformers): aprt runs its model_bin, ONNX Runtime the same network exported
+in standard ONNX ops (model_portable.onnx: ORT has no PointNet++ operators, so
+farthest-point sampling is an unrolled loop there), with the same weights.
 """
 
 import argparse
@@ -41,12 +47,20 @@ def ensure_ort():
 
 def ensure_model(size, out_root, config="full"):
     d = os.path.join(out_root, f"{config}_{size}")
-    if not os.path.exists(os.path.join(d, "model.aprt")):
-        print(f"run_bench: making the {config} {size}x{size} model in {d}", flush=True)
+    points = config == "points"
+    want = "model_portable.onnx" if points else "model.aprt"
+    if not os.path.exists(os.path.join(d, want)) or not os.path.exists(os.path.join(d, "model.aprt")):
+        print(f"run_bench: making the {config} {size} model in {d}"
+              + (" (and its portable ONNX: minutes)" if points else ""), flush=True)
         env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "tools"), PYTHONWARNINGS="ignore")
         sh([PYTHON, "-m", "aprt_tools", "golden", "--config", config, "--size", str(size),
-            "--count", "2", "--convert", "--out", d], env=env)
+            "--count", "2", "--convert", "--out", d] + (["--portable", "--seed", "10"] if points
+                                                       else []), env=env)
     return d
+
+
+def ort_model(s, d):
+    return os.path.join(d, "model_portable.onnx" if s == "points" else "model.onnx")
 
 
 def ensure_int8(d):
@@ -111,23 +125,29 @@ def main():
     ap.add_argument("--no-int8", action="store_true", help="fp32 only")
     ap.add_argument("--bev", action="store_true",
                     help="also the LiDAR BEV model (256 x 256 x 2 histogram, same network)")
+    ap.add_argument("--points", action="store_true",
+                    help="also the LiDAR raw-points model (4096 points, PointNet++)")
     a = ap.parse_args()
     if not os.path.exists(a.aprt):
         sys.exit(f"run_bench: {a.aprt} not found: build first (tools/setup.sh)")
     ensure_ort()
-    sizes = [int(s) for s in a.sizes.split(",")] + (["bev"] if a.bev else [])
+    sizes = [int(s) for s in a.sizes.split(",") if s] + (["bev"] if a.bev else []) + \
+        (["points"] if a.points else [])
     threads = [int(t) for t in a.threads.split(",")]
-    models = {s: ensure_model(256, a.models, "bev") if s == "bev" else ensure_model(s, a.models)
-              for s in sizes}
+    models = {s: ensure_model(256, a.models, "bev") if s == "bev" else
+              ensure_model(4096, a.models, "points") if s == "points" else
+              ensure_model(s, a.models) for s in sizes}
     ort = {(s, t): [] for s in sizes for t in threads}
     ours = {(s, t): [] for s in sizes for t in threads}
     int8 = {(s, t): [] for s in sizes for t in threads}
-    int8_models = {} if a.no_int8 else {s: ensure_int8(models[s]) for s in sizes}
+    # (int8 of the points model: not measured; its policy is the image model's)
+    int8_models = {} if a.no_int8 else {s: ensure_int8(models[s]) for s in sizes
+                                         if s != "points"}
     info = {}
     for r in range(a.rounds):
         for s in sizes:
             for t in threads:
-                ort[(s, t)] += run_ort(os.path.join(models[s], "model.onnx"), t, a.runs)
+                ort[(s, t)] += run_ort(ort_model(s, models[s]), t, a.runs)
                 ms, d = run_aprt(a.aprt, os.path.join(models[s], "model.aprt"), t, a.runs)
                 ours[(s, t)] += ms
                 info[(s, t)] = d
@@ -148,12 +168,14 @@ def main():
         for t in threads:
             om, am = statistics.median(ort[(s, t)]), statistics.median(ours[(s, t)])
             d = info[(s, t)]
-            label = "BEV 256x256x2" if s == "bev" else f"{s}x{s}"
+            label = {"bev": "BEV 256x256x2", "points": "points 4096x6"}.get(s, f"{s}x{s}")
             row = (f"| {label} | {t} | {om:.1f} | {p99(ort[(s, t)]):.1f} | {am:.1f} | "
                    f"{p99(ours[(s, t)]):.1f} | **{om / am:.2f}x** |")
-            if not a.no_int8:
+            if not a.no_int8 and int8[(s, t)]:
                 qm = statistics.median(int8[(s, t)])
                 row += f" {qm:.1f} | {p99(int8[(s, t)]):.1f} | **{om / qm:.2f}x** |"
+            elif not a.no_int8:
+                row += " — | — | — |"
             lines.append(row + f" {d['isa']} | {d['allocations_during_runs']} |")
     table = head + "\n\n" + "\n".join(lines) + "\n"
     print()

@@ -110,9 +110,30 @@ def fps_indices(p: torch.Tensor, count: int) -> torch.Tensor:
     return torch.stack(picked, dim=1)
 
 
+@torch.jit.script
+def _fps_loop(p: torch.Tensor, count: int) -> torch.Tensor:
+    """fps_indices as a scripted loop: the portable export's spelling (one ONNX
+    Loop instead of `count` unrolled steps, which tracing takes hours over)."""
+    b = p.size(0)
+    n = p.size(1)
+    dist = torch.full([b, n], float("inf"))
+    far = torch.zeros([b], dtype=torch.long)
+    out = [far]
+    for _ in range(count - 1):
+        c = torch.gather(p, 1, far.view(b, 1, 1).expand(b, 1, 3))
+        dx = p[:, :, 0] - c[:, :, 0]
+        dy = p[:, :, 1] - c[:, :, 1]
+        dz = p[:, :, 2] - c[:, :, 2]
+        dist = torch.minimum(dist, (dx * dx + dy * dy) + dz * dz)
+        far = torch.argmax(dist, dim=1)
+        out.append(far)
+    return torch.stack(out, 1)
+
+
 def fps_plain(xyz: torch.Tensor, count: int) -> torch.Tensor:
     p = _points(xyz)
-    sel = _gather_rows(p, fps_indices(p, count))  # (B, S, 3)
+    idx = _fps_loop(p.contiguous(), count) if _portable[0] else fps_indices(p, count)
+    sel = _gather_rows(p, idx)  # (B, S, 3)
     return sel.transpose(1, 2)[..., None]
 
 
