@@ -80,7 +80,8 @@ int cmd_run(int argc, char** argv) {
         "  --config FILE   YAML configuration (docs/configuration.md); default:\n"
         "                  the demo drive, %s/config/default.yaml\n"
         "  --model FILE    override the configuration's model\n"
-        "  --replay DIR    replay this DeepLoc-layout sequence\n"
+        "  --replay DIR    replay this DeepLoc-layout sequence (a LiDAR sequence with\n"
+        "                  a LiDAR source: lidar_poses.txt + scans)\n"
         "  --rate HZ       replay rate (0: as fast as inference runs)\n"
         "  --frames N      stop the replay after N frames\n"
         "  --threads N     engine threads\n"
@@ -142,8 +143,8 @@ int cmd_run(int argc, char** argv) {
   }
   // The command line's replay options apply to every camera's replay.
   const auto adjust = [&](Config::Source& src) {
-    if (replay) {
-      src.type = "replay";
+    if (replay) {  // a LiDAR configuration replays LiDAR sequences
+      src.type = src.lidar_source() ? "lidar_replay" : "replay";
       src.replay.path = replay;
     } else {
       src.replay.path = resolve(src.replay.path, base);

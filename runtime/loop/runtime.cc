@@ -156,7 +156,7 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
   if (!r->ring_) return Error(Errc::kOutOfMemory, "run: out of memory");
   // Per-pose records for the summary and --timing: the run's length when it is
   // known, else 2^20 poses (9.7 h at 30 Hz; later poses are not recorded).
-  const bool replay = config.source.type == "replay";
+  const bool replay = config.source.type == "replay" || config.source.type == "lidar_replay";
   const size_t capacity = replay && config.source.replay.frames > 0
                               ? size_t(config.source.replay.frames) + 16
                           : replay && !config.source.replay.loop ? frames + 16
@@ -856,18 +856,20 @@ void Runtime::service_reload() {
 Status Runtime::write_timing_report(const char* json_path) const {
   TimingContext ctx;
   ctx.model = config_.model.c_str();
-  const bool replay = config_.source.type == "replay";
+  const bool replay = config_.source.type == "replay" || config_.source.type == "lidar_replay";
   const Config::Source& src = config_.source;
   ctx.source =
-      replay ? src.replay.path.c_str()
+      replay                      ? src.replay.path.c_str()
+      : src.type == "pointcloud2" ? src.pointcloud2.topic.c_str()
       : src.type == "libcamera"
           ? (src.libcamera.camera.empty() ? "libcamera camera 0" : src.libcamera.camera.c_str())
           : src.v4l2.device.c_str();
   ctx.isa = engine_->isa();
   ctx.threads = engine_->threads();
-  const double hz = replay                    ? (src.replay.recorded ? 0 : src.replay.rate_hz)
-                    : src.type == "libcamera" ? double(src.libcamera.fps)
-                                              : double(src.v4l2.fps);
+  const double hz = replay                      ? (src.replay.recorded ? 0 : src.replay.rate_hz)
+                    : src.type == "pointcloud2" ? 0.0  // the LiDAR's own rate
+                    : src.type == "libcamera"   ? double(src.libcamera.fps)
+                                                : double(src.v4l2.fps);
   ctx.camera_period_ms = hz > 0 ? 1000.0 / hz : 0;
   ctx.inference_deadline_ms = config_.supervisor.inference_deadline_ms;
   ctx.allocations_counted = allocation_count_ != nullptr;
