@@ -112,11 +112,24 @@ def cmd_train(a):
     from .export import export_onnx
     from .train import train
 
+    from .model.apr_transformer import AprConfig
+
     if a.size is None:
         a.size = 4096 if a.modality == "points" else 128
+    preset = None
+    if a.config_json:
+        try:
+            preset = AprConfig.from_json(open(a.config_json).read())
+            if preset.points:
+                from .model.pointnet2 import check_points_config
+
+                check_points_config(preset.points)
+        except (OSError, ValueError, TypeError) as e:
+            print(f"train: {a.config_json}: {e}", file=sys.stderr)
+            sys.exit(2)
     model, cfg = train(a.data, a.out, size=a.size, minutes=a.minutes, batch=a.batch, lr=a.lr,
                        seed=a.seed, threads=a.threads, hidden=a.hidden, layers=a.layers,
-                       modality=a.modality)
+                       modality=a.modality, config=preset)
     model.eval()
     with open(f"{a.out}/model.onnx", "wb") as f:
         f.write(export_onnx(model, 13))
@@ -127,6 +140,12 @@ def cmd_train(a):
         a.method, a.percentile, a.frames, a.fp32_ops = "percentile", 99.99, 64, None
         a.backbone = a.sensitivity = a.verbose = False
         cmd_quantize(a)
+
+
+def cmd_config(a):
+    from .model.apr_transformer import AprConfig
+
+    print(AprConfig.named(a.name, a.size).to_json())
 
 
 def cmd_plot_eval(a):
@@ -231,10 +250,18 @@ def main(argv=None):
     t.add_argument("--layers", type=int, default=3, help="encoder and decoder layers per branch")
     t.add_argument("--int8", action="store_true",
                    help="also write model_int8.aprt, calibrated on 64 frames of --data")
+    t.add_argument("--config-json", help="a whole configuration (from `aprt_tools config NAME`, "
+                                          "edited) instead of the --modality preset")
     t.add_argument("--modality", default="image", choices=("image", "bev", "points"),
                    help="bev: LiDAR scans (lidar_poses.txt) as BEV histograms, grid --size; "
                         "points: the same scans through PointNet++, --size points")
     t.set_defaults(fn=cmd_train)
+
+    cf = sub.add_parser("config", help="print a preset configuration as JSON (to edit for "
+                                       "train --config-json or export --config-json)")
+    cf.add_argument("name", choices=CONFIGS)
+    cf.add_argument("--size", type=int, help="image side / BEV grid / points sampled")
+    cf.set_defaults(fn=cmd_config)
 
     pe = sub.add_parser("plot-eval", help="trajectory and error plot from `aprt eval --csv` files")
     pe.add_argument("csv", nargs="+", help="one or more CSV files (side by side)")

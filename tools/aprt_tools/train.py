@@ -155,17 +155,30 @@ def evaluate(model, imgs, pos, quat, lo, hi, batch=32, mean=None, std=None):
 
 def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: int = 16,
           lr: float = 1e-4, seed: int = 1, threads: int = 2, hidden: int = 128, layers: int = 3,
-          warmup_steps: int = 200, modality: str = "image", log=print):
+          warmup_steps: int = 200, modality: str = "image", config: AprConfig | None = None,
+          log=print):
     """modality "image": DATA's poses.txt + images at size x size; "bev": its
     lidar_poses.txt + scans as size x size BEV histograms over 32 m (the 'bev'
     configuration's geometry at that grid); "points": the same scans as
     `size` farthest-point samples through PointNet++ (the 'points'
-    configuration; size >= 1024). LiDAR without augmentation."""
+    configuration; size >= 1024). LiDAR without augmentation.
+
+    config: a whole configuration instead of the preset (`python3 -m aprt_tools
+    config NAME` writes one to edit: BEV cell size, height threshold and clip
+    count; the points crop, sample count, levels and token grid; the
+    transformer); its modality and size win over `modality`, `size`,
+    `hidden` and `layers`."""
     torch.manual_seed(seed)
     torch.set_num_threads(threads)
     os.makedirs(out, exist_ok=True)
     t0 = time.time()
-    cfg = AprConfig.named({"bev": "bev", "points": "points"}.get(modality, "full"), size)
+    if config is not None:
+        cfg = AprConfig.from_json(config.to_json())
+        modality = "points" if cfg.points else "bev" if cfg.bev else "image"
+        size = cfg.image_size
+        hidden, layers = cfg.hidden_dim, cfg.enc_layers
+    else:
+        cfg = AprConfig.named({"bev": "bev", "points": "points"}.get(modality, "full"), size)
     if modality == "bev":
         imgs, pos, quat = load_lidar_sequence(data, size, cfg.bev)
     elif modality == "points":
@@ -180,8 +193,9 @@ def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: in
     lo = pos[tr].min(dim=0).values
     hi = pos[tr].max(dim=0).values
     hi = torch.maximum(hi, lo + 1.0)  # a flat axis (camera height) still gets a unit range
-    cfg.hidden_dim, cfg.dim_feedforward = hidden, 2 * hidden
-    cfg.enc_layers = cfg.dec_layers = layers
+    if config is None:
+        cfg.hidden_dim, cfg.dim_feedforward = hidden, 2 * hidden
+        cfg.enc_layers = cfg.dec_layers = layers
     cfg.dropout = 0.0  # the augmentation regularises; dropout slowed the start further
     cfg.pose_min, cfg.pose_max = tuple(lo.tolist()), tuple(hi.tolist())
     model = AprTransformer(cfg)
