@@ -2,7 +2,7 @@
 //           [--isa X] [--limit N]
 //
 // Runs the model on every frame of a labelled sequence -- camera (DeepLoc
-// layout) or, for a LiDAR BEV model, scans (lidar_poses.txt + KITTI/PCD) --
+// layout) or, for a LiDAR model (BEV or points), scans (lidar_poses.txt + KITTI/PCD) --
 // and reports position and orientation errors: median, mean, p90, max; per-frame
 // rows with --csv (plot them with `python3 -m aprt_tools plot-eval`). With
 // --compare (e.g. the int8 model beside its fp32 source) the second model runs
@@ -79,8 +79,9 @@ int cmd_eval(int argc, char** argv) {
   if (args.flag("--help")) {
     std::printf(
         "usage: aprt eval --model MODEL --data DIR [options]\n"
-        "  DIR           camera: poses.txt + images (DeepLoc layout); LiDAR BEV model:\n"
-        "                lidar_poses.txt + scans (KITTI .bin or PCD), as aprt_synth --lidar\n"
+        "  DIR           camera: poses.txt + images (DeepLoc layout); LiDAR model (BEV\n"
+        "                or points): lidar_poses.txt + scans (KITTI .bin or PCD), as\n"
+        "                aprt_synth --lidar\n"
         "  --csv FILE    per-frame predictions, truth and errors\n"
         "  --json        summary as one JSON object\n"
         "  --compare M2  also run model M2 (e.g. its int8 version) on the same input:\n"

@@ -9,6 +9,7 @@ namespace aprt::cli {
 int cmd_info(int argc, char** argv);
 int cmd_bench(int argc, char** argv);
 int cmd_eval(int argc, char** argv);
+int cmd_inputs(int argc, char** argv);
 int cmd_run(int argc, char** argv);
 int cmd_candump(int argc, char** argv);
 int cmd_sign(int argc, char** argv);

@@ -20,6 +20,7 @@ void usage(FILE* out) {
                "  info MODEL     what a model file holds: metadata, ops, memory plan\n"
                "  bench MODEL    latency and memory of a model on this machine\n"
                "  eval           errors of a model on a labelled sequence\n"
+               "  inputs         the network inputs of a labelled sequence, as a .npy array\n"
                "  infer MODEL F  one saved raw frame (aprt run --save-frame) through a model\n"
                "  candump        decode aprt's pose frames from CAN (the receiver's view)\n"
                "  ddsdump        receive aprt's poses and status over DDS (the ROS 2 side's view)\n"
@@ -70,6 +71,7 @@ int main(int argc, char** argv) {
   if (!std::strcmp(cmd, "info")) return aprt::cli::cmd_info(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "bench")) return aprt::cli::cmd_bench(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "eval")) return aprt::cli::cmd_eval(argc - 1, argv + 1);
+  if (!std::strcmp(cmd, "inputs")) return aprt::cli::cmd_inputs(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "candump")) return aprt::cli::cmd_candump(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "sign")) return aprt::cli::cmd_sign(argc - 1, argv + 1);
   if (!std::strcmp(cmd, "ddsdump")) return aprt::cli::cmd_ddsdump(argc - 1, argv + 1);

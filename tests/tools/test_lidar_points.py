@@ -104,6 +104,30 @@ class Input(unittest.TestCase):
         self.assertEqual(points_meta(dict(crop_radius_m=20, coord_scale_m=15)), [20.0, 15.0])
 
 
+class TrainingInputs(unittest.TestCase):
+    def test_inputs_array_must_fit_the_sequence(self):
+        import os
+        import tempfile
+
+        from aprt_tools.train import load_points_sequence
+
+        with tempfile.TemporaryDirectory() as d:
+            os.makedirs(os.path.join(d, "lidar"))
+            with open(os.path.join(d, "lidar_poses.txt"), "w") as f:
+                for i in range(4):
+                    np.zeros((600, 4), np.float32).tofile(os.path.join(d, f"lidar/{i}.bin"))
+                    f.write(f"lidar/{i}.bin {i} 0 0 1 0 0 0\n")
+            cfg = dict(points_config(tiny=True))
+            good = np.random.default_rng(1).standard_normal((2, 512, 1, 6)).astype(np.float32)
+            np.save(os.path.join(d, "in.npy"), good)
+            x, pos, _ = load_points_sequence(d, cfg, lambda *a: None, os.path.join(d, "in.npy"), 2)
+            self.assertEqual(tuple(x.shape), (2, 6, 512, 1))
+            self.assertEqual(pos[:, 0].tolist(), [0.0, 2.0])  # every 2nd pose
+            np.testing.assert_array_equal(x[1, :, 7, 0].numpy(), good[1, 7, 0])
+            with self.assertRaisesRegex(ValueError, "needs \\[4, 512, 1, 6\\]"):
+                load_points_sequence(d, cfg, lambda *a: None, os.path.join(d, "in.npy"), 1)
+
+
 class Configuration(unittest.TestCase):
     def test_presets(self):
         full = AprConfig.named("points")

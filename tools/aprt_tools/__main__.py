@@ -127,9 +127,14 @@ def cmd_train(a):
         except (OSError, ValueError, TypeError) as e:
             print(f"train: {a.config_json}: {e}", file=sys.stderr)
             sys.exit(2)
-    model, cfg = train(a.data, a.out, size=a.size, minutes=a.minutes, batch=a.batch, lr=a.lr,
-                       seed=a.seed, threads=a.threads, hidden=a.hidden, layers=a.layers,
-                       modality=a.modality, config=preset)
+    try:
+        model, cfg = train(a.data, a.out, size=a.size, minutes=a.minutes, batch=a.batch, lr=a.lr,
+                           seed=a.seed, threads=a.threads, hidden=a.hidden, layers=a.layers,
+                           modality=a.modality, config=preset, inputs=a.inputs,
+                           inputs_every=a.inputs_every)
+    except (OSError, ValueError) as e:
+        print(f"train: {e}", file=sys.stderr)
+        sys.exit(2)
     model.eval()
     with open(f"{a.out}/model.onnx", "wb") as f:
         f.write(export_onnx(model, 13))
@@ -250,6 +255,10 @@ def main(argv=None):
     t.add_argument("--layers", type=int, default=3, help="encoder and decoder layers per branch")
     t.add_argument("--int8", action="store_true",
                    help="also write model_int8.aprt, calibrated on 64 frames of --data")
+    t.add_argument("--inputs", help="points models: the .npy `aprt inputs` wrote of --data "
+                                     "(the runtime's preprocessing, much faster than Python's)")
+    t.add_argument("--inputs-every", type=int, default=1,
+                   help="the --every given to `aprt inputs` (frames of --data used)")
     t.add_argument("--config-json", help="a whole configuration (from `aprt_tools config NAME`, "
                                           "edited) instead of the --modality preset")
     t.add_argument("--modality", default="image", choices=("image", "bev", "points"),
