@@ -7,7 +7,9 @@
 #include "drivers/replay/replay_source.h"
 
 namespace aprt {
+namespace {
 
+// The point gate of a LiDAR source (drivers/lidar/point_cloud.h) from the configuration.
 ScanSourceOptions scan_options(const Config::Source& src) {
   ScanSourceOptions o;
   o.max_points = size_t(src.lidar.max_points);
@@ -16,12 +18,16 @@ ScanSourceOptions scan_options(const Config::Source& src) {
   return o;
 }
 
+ReplayPacing pacing_of(const Config::Source& src) {
+  return {src.replay.rate_hz, src.replay.recorded, src.replay.loop, uint64_t(src.replay.frames)};
+}
+
+}  // namespace
+
 Expected<OpenedSource> open_source(const Config::Source& src) {
   OpenedSource o;
   if (src.type == "replay") {
-    ReplayPacing pacing{src.replay.rate_hz, src.replay.recorded, src.replay.loop,
-                        uint64_t(src.replay.frames)};
-    auto replay = ReplaySource::open(src.replay.path.c_str(), pacing);
+    auto replay = ReplaySource::open(src.replay.path.c_str(), pacing_of(src));
     if (!replay) return replay.error();
     o.width = replay.value()->replay().width();
     o.height = replay.value()->replay().height();
@@ -57,12 +63,10 @@ Expected<OpenedSource> open_source(const Config::Source& src) {
     o.format = dev.value()->format();
     o.source = std::move(dev.value());
   } else if (src.type == "lidar_replay") {
-    ReplayPacing pacing{src.replay.rate_hz, src.replay.recorded, src.replay.loop,
-                        uint64_t(src.replay.frames)};
-    auto replay = LidarReplaySource::open(src.replay.path.c_str(), pacing, scan_options(src));
+    auto replay =
+        LidarReplaySource::open(src.replay.path.c_str(), pacing_of(src), scan_options(src));
     if (!replay) return replay.error();
     o.frames = replay.value()->size();
-    o.scans = true;
     o.source = std::move(replay.value());
   } else if (src.type == "pointcloud2") {
     PointCloud2Options po;
@@ -73,7 +77,6 @@ Expected<OpenedSource> open_source(const Config::Source& src) {
     po.loopback_only = src.pointcloud2.loopback_only;
     auto dev = PointCloud2Source::create(po, scan_options(src));
     if (!dev) return dev.error();
-    o.scans = true;
     o.source = std::move(dev.value());
   } else {
     return Error(Errc::kUnsupported, "run: source type '%s' is not available in this build",

@@ -15,13 +15,8 @@ struct OpenedSource {
   std::unique_ptr<FrameSource> source;
   int width = 0, height = 0;  // what the source is configured to deliver
   kernels::PixelFormat format = kernels::PixelFormat::kRgb24;
-  size_t frames = 0;   // a replay's length (0 for a device)
-  bool scans = false;  // LiDAR scans (FrameKind::kScan), not images
+  size_t frames = 0;  // a replay's length (0 for a device)
 };
-
-// The point gate of a LiDAR source (drivers/lidar/point_cloud.h) from the configuration.
-struct ScanSourceOptions;
-ScanSourceOptions scan_options(const Config::Source& src);
 
 Expected<OpenedSource> open_source(const Config::Source& src);
 

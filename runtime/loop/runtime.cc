@@ -105,6 +105,10 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
     ch->base_from_sensor =
         RigidTransform::from_xyz_rpy(cam.sensor_xyz, cam.sensor_rpy_deg).isometry();
     const Config::Source& src = cam.source;
+    // Before any device is opened: a camera model needs a camera, a LiDAR model a LiDAR.
+    if (Status fit = model_fits_source(r->engine_->meta(), src, config.model); !fit) {
+      return fit.error();
+    }
     auto opened = open_source(src);
     if (!opened) {
       if (cams.size() == 1) return opened.error();
@@ -114,7 +118,7 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
     const int width = opened->width, height = opened->height;
     const kernels::PixelFormat format = opened->format;
     if (i == 0) frames = opened->frames;
-    ch->scans = opened->scans;
+    ch->scans = src.lidar_source();
     ch->source = std::move(opened->source);
     auto slot = FrameSlot::create(ch->source->max_frame_bytes());
     if (!slot) return slot.error();
@@ -123,9 +127,6 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
       ch->source->pace_with(ch->slot.get());
     }
     const format::Modality modality = r->engine_->meta().modality;
-    if (Status fit = model_fits_source(r->engine_->meta(), src, config.model); !fit) {
-      return fit.error();
-    }
     if (ch->scans) {
       const size_t max_points = size_t(src.lidar.max_points);
       if (modality == format::Modality::kLidarPoints) {

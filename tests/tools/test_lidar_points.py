@@ -100,6 +100,20 @@ class Input(unittest.TestCase):
         idx, ok = fps(np.zeros((0, 3), np.float32), 3)
         self.assertFalse(ok)
 
+    def test_batched_sampling_equals_one_by_one(self):
+        from aprt_tools.lidar_points import points_features_many, synthetic_scene
+
+        rng = np.random.default_rng(5)
+        scans = [synthetic_scene(rng, n=n) for n in (3000, 1500, 2500)]
+        scans.append(scans[0][:100])  # too few points: the single-scan path
+        cfg = dict(crop_radius_m=20.0, coord_scale_m=20.0)
+        many, oks = points_features_many(scans, 256, cfg, batch=2)
+        for k, scan in enumerate(scans):
+            f, ok = points_features(scan, 256, cfg)
+            np.testing.assert_array_equal(many[k], f)
+            self.assertEqual(oks[k], ok)
+        self.assertFalse(oks[3])
+
     def test_meta_order_is_the_formats(self):
         self.assertEqual(points_meta(dict(crop_radius_m=20, coord_scale_m=15)), [20.0, 15.0])
 

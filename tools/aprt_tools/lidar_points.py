@@ -55,38 +55,45 @@ def fps(p: np.ndarray, count: int) -> tuple[np.ndarray, bool]:
     return idx, n >= count
 
 
-def points_features(scan: np.ndarray, samples: int, points: dict, mean=None,
-                    std=None) -> tuple[np.ndarray, bool]:
-    """scan [M, >=3] float32 (sensor frame) -> features [samples, 6] float32, ok."""
-    p = np.asarray(scan, np.float32).reshape(-1, np.shape(scan)[-1])[:, :3]
-    p = p[np.isfinite(p).all(axis=1)]
-    p = radius_crop(p, points["crop_radius_m"])
-    if len(p) == 0:
-        return np.zeros((samples, 6), np.float32), False
-    idx, ok = fps(p, samples)
-    sel = p[idx]
+def _features(sel: np.ndarray, points: dict, mean=None, std=None) -> np.ndarray:
+    """Sampled points [samples, 3] -> [samples, 6]: p / s, (p - mean of the samples) / s."""
     s = np.float32(points["coord_scale_m"])
     c = sel.astype(np.float64).mean(axis=0).astype(np.float32)
     f = np.concatenate([sel / s, (sel - c) / s], axis=1).astype(np.float32)
     if mean is not None:
         f = (f - np.asarray(mean, np.float32)) / np.asarray(std, np.float32)
-    return f.astype(np.float32), ok
+    return f.astype(np.float32)
+
+
+def _cropped(scan, points: dict) -> np.ndarray:
+    p = np.asarray(scan, np.float32).reshape(-1, np.shape(scan)[-1])[:, :3]
+    return radius_crop(p[np.isfinite(p).all(axis=1)], points["crop_radius_m"])
+
+
+def points_features(scan: np.ndarray, samples: int, points: dict, mean=None,
+                    std=None) -> tuple[np.ndarray, bool]:
+    """scan [M, >=3] float32 (sensor frame) -> features [samples, 6] float32, ok."""
+    p = _cropped(scan, points)
+    if len(p) == 0:
+        return np.zeros((samples, 6), np.float32), False
+    idx, ok = fps(p, samples)
+    return _features(p[idx], points, mean, std), ok
 
 
 def points_features_many(scans, samples: int, points: dict, batch: int = 32):
     """points_features of many scans -> features [len, samples, 6], ok [len]; the
-    farthest-point sampling of scans with enough points runs batched in torch
-    (the same arithmetic and tie rule as fps(), so the same indices), the rest
-    one by one."""
+    farthest-point sampling of scans with enough points runs batched through
+    the network's own sampler (model/point_ops.fps_indices: the same arithmetic
+    and tie rule as fps(), so the same indices), the rest one by one."""
     import torch
+
+    from .model.point_ops import fps_indices
 
     feats = np.zeros((len(scans), samples, 6), np.float32)
     oks = np.zeros(len(scans), bool)
-    s = np.float32(points["coord_scale_m"])
     cropped = []
     for i, scan in enumerate(scans):
-        p = np.asarray(scan, np.float32).reshape(-1, np.shape(scan)[-1])[:, :3]
-        p = radius_crop(p[np.isfinite(p).all(axis=1)], points["crop_radius_m"])
+        p = _cropped(scan, points)
         if len(p) < samples:
             feats[i], oks[i] = points_features(scan, samples, points)
         else:
@@ -97,22 +104,9 @@ def points_features_many(scans, samples: int, points: dict, batch: int = 32):
         # Padding repeats each scan's first point: distance 0 to the first pick,
         # so never chosen while any real point is farther (len >= samples).
         pad = np.stack([np.concatenate([p, np.repeat(p[:1], n - len(p), 0)]) for _, p in part])
-        t = torch.from_numpy(pad)
-        dist = torch.full((len(part), n), float("inf"))
-        far = torch.zeros(len(part), dtype=torch.int64)
-        idx = torch.zeros((len(part), samples), dtype=torch.int64)
-        rows = torch.arange(len(part))
-        for k in range(1, samples):
-            c = t[rows, far]
-            dx, dy, dz = (t[:, :, j] - c[:, j:j + 1] for j in range(3))
-            dist = torch.minimum(dist, (dx * dx + dy * dy) + dz * dz)
-            far = torch.argmax(dist, dim=1)
-            idx[:, k] = far
+        idx = fps_indices(torch.from_numpy(pad), samples).numpy()
         for j, (i, p) in enumerate(part):
-            sel = p[idx[j].numpy()]
-            c = sel.astype(np.float64).mean(axis=0).astype(np.float32)
-            feats[i] = np.concatenate([sel / s, (sel - c) / s], axis=1)
-            oks[i] = True
+            feats[i], oks[i] = _features(p[idx[j]], points), True
     return feats, oks
 
 

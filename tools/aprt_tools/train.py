@@ -101,11 +101,11 @@ def load_points_sequence(folder: str, points: dict, log=print, inputs: str | Non
         log(f"train: {len(poses)} scans' inputs from {inputs}")
     else:
         feats = np.zeros((len(poses), points["samples"], 6), np.float32)
-    chunk = 256
-    for a in range(0, 0 if inputs else len(poses), chunk):
-        scans = [read_kitti(os.path.join(folder, name)) for name, _, _ in poses[a:a + chunk]]
-        feats[a:a + chunk], _ = points_features_many(scans, points["samples"], points)
-        log(f"train: sampled {min(a + chunk, len(poses))}/{len(poses)} scans")
+        chunk = 256
+        for a in range(0, len(poses), chunk):
+            scans = [read_kitti(os.path.join(folder, name)) for name, _, _ in poses[a:a + chunk]]
+            feats[a:a + chunk], _ = points_features_many(scans, points["samples"], points)
+            log(f"train: sampled {min(a + chunk, len(poses))}/{len(poses)} scans")
     x = torch.from_numpy(feats).permute(0, 2, 1).unsqueeze(-1).contiguous()
     pos = torch.tensor(np.stack([p for _, p, _ in poses]), dtype=torch.float32)
     quat = torch.tensor(np.stack([q / np.linalg.norm(q) for _, _, q in poses]), dtype=torch.float32)

@@ -80,17 +80,11 @@ const float* feats_of(const OpNode& node, int i) {
   return node.n_in > i && node.in[i] ? node.in[i]->f32() : nullptr;
 }
 
-void ball_ref_task(void* data, int task, int) {
-  const auto& node = *static_cast<const OpNode*>(data);
-  const auto& s = node.state_as<PointState>();
-  kernels::f32_ball_group__ref(node.in[0]->f32(), size_t(s.stride), size_t(s.n), node.in[1]->f32(),
-                               size_t(s.m_stride), s.split.begin(task), s.split.end(task), s.radius,
-                               s.k, feats_of(node, 2), s.c, node.out[0]->f32());
-}
-
 void eval_ball_ref(const OpNode& node, const RunContext&) {
   const auto& s = node.state_as<PointState>();
-  for (int t = 0; t < s.split.tasks; ++t) ball_ref_task(const_cast<OpNode*>(&node), t, 0);
+  kernels::f32_ball_group__ref(node.in[0]->f32(), size_t(s.stride), size_t(s.n), node.in[1]->f32(),
+                               size_t(s.m_stride), 0, s.m, s.radius, s.k, feats_of(node, 2), s.c,
+                               node.out[0]->f32());
 }
 
 struct SoaTask {
@@ -219,13 +213,12 @@ Status prepare_ball_group(OpNode& node) {
   APRT_OP_ENSURE(node, std::isfinite(s.radius) && s.radius > 0.0f, Errc::kBadOp,
                  "radius %g must be finite and > 0", double(s.radius));
   node.flops = 8ull * uint64_t(s.n) * uint64_t(s.m);
-  s.split = point_split(node, s.m, int64_t(s.n) * 4);
   if (node.ks) {
+    s.split = point_split(node, s.m, int64_t(s.n) * 4);
     node.scratch_floats = 3 * size_t(s.n);
     node.eval = eval_ball_fast;
     node.kernel = "portable";
   } else {
-    s.split = make_split(s.m, 1, 1);
     node.eval = eval_ball_ref;
   }
   return ok();
