@@ -7,7 +7,6 @@
 // namespace (after vmath.inl).
 
 constexpr int kAttnKB = 128;  // keys per softmax block
-static const float kOnesAttn[16] = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};
 
 // Packs head h of K and V for attn_block: K^T in blocks of kAttnKB keys
 // (kt_h[block][p][j], so a block's scoring reads 16 KB of contiguous memory at
@@ -17,22 +16,24 @@ static void attn_pack_kv(int kv_len, int lk_pad, int d, const float* k, size_t l
                          const float* v, size_t ldv, int h, float* kt, float* vp) {
   float* kdst = kt + size_t(h) * d * lk_pad;
   float* vdst = vp + size_t(h) * d * lk_pad;
-  for (int j = 0; j < lk_pad; ++j) {
-    const int blk = j / kAttnKB, jj = j % kAttnKB;
-    float* kb = kdst + size_t(blk) * d * kAttnKB + jj;
+  // V: one head's rows back to back, whole vectors where they fit.
+  for (int j = 0; j < kv_len; ++j) {
+    const float* vs = v + size_t(j) * ldv + size_t(h) * d;
     float* vr = vdst + size_t(j) * d;
+    int p = 0;
+    for (; p + kLanes <= d; p += kLanes) vstore(vr + p, vload(vs + p));
+    if (p < d) vstore_n(vr + p, vload_n(vs + p, d - p), d - p);
+  }
+  for (size_t i = size_t(kv_len) * d; i < size_t(lk_pad) * d; ++i) vdst[i] = 0.0f;
+  // K^T in blocks of kAttnKB keys: a key's row is read once and scattered
+  // down its block column (reading columns instead, 1 KB apart, thrashes L1).
+  for (int j = 0; j < lk_pad; ++j) {
+    float* kb = kdst + size_t(j / kAttnKB) * d * kAttnKB + j % kAttnKB;
     if (j < kv_len) {
       const float* kr = k + size_t(j) * ldk + size_t(h) * d;
-      const float* vs = v + size_t(j) * ldv + size_t(h) * d;
-      for (int p = 0; p < d; ++p) {
-        kb[size_t(p) * kAttnKB] = kr[p];
-        vr[p] = vs[p];
-      }
+      for (int p = 0; p < d; ++p) kb[size_t(p) * kAttnKB] = kr[p];
     } else {
-      for (int p = 0; p < d; ++p) {
-        kb[size_t(p) * kAttnKB] = 0.0f;
-        vr[p] = 0.0f;
-      }
+      for (int p = 0; p < d; ++p) kb[size_t(p) * kAttnKB] = 0.0f;
     }
   }
 }
@@ -46,73 +47,101 @@ static inline size_t attn_thread_scratch(int rows, int dv) {
   return size_t(rows) * kAttnKB + size_t(kAttnChunk) * (size_t(dv) * kLanes + 2);
 }
 
+// Raw scores of R query rows against S vectors of keys starting at kp (a
+// column of a packed K^T block): sbuf[r][j] = q_r . k_j for j < S * kLanes,
+// and the rows' running maxima mx. Keys at n and beyond are zero padding:
+// their scores become -inf, out of the maximum and weighted 2^-125 (below any
+// row sum's rounding) in the exponent pass.
+template <int R, int S>
+static inline void attn_score(int d, const float* qh, size_t ldq, const float* kp, int n,
+                              float* sbuf, V* mx) {
+  V acc[R][S];
+#pragma GCC unroll 8
+  for (int r = 0; r < R; ++r) {
+#pragma GCC unroll 4
+    for (int t = 0; t < S; ++t) acc[r][t] = vzero();
+  }
+  for (int p = 0; p < d; ++p) {
+    V kv[S];
+#pragma GCC unroll 4
+    for (int t = 0; t < S; ++t) kv[t] = vload(kp + size_t(p) * kAttnKB + t * kLanes);
+#pragma GCC unroll 8
+    for (int r = 0; r < R; ++r) {
+      const V qv = vset1(qh[size_t(r) * ldq + p]);
+#pragma GCC unroll 4
+      for (int t = 0; t < S; ++t) acc[r][t] = vfmadd(qv, kv[t], acc[r][t]);
+    }
+  }
+#pragma GCC unroll 8
+  for (int r = 0; r < R; ++r) {
+#pragma GCC unroll 4
+    for (int t = 0; t < S; ++t) vstore(sbuf + r * kAttnKB + t * kLanes, acc[r][t]);
+  }
+  if (n >= S * kLanes) {
+#pragma GCC unroll 8
+    for (int r = 0; r < R; ++r) {
+#pragma GCC unroll 4
+      for (int t = 0; t < S; ++t) mx[r] = vmax(mx[r], acc[r][t]);
+    }
+  } else {
+    for (int r = 0; r < R; ++r) {
+      for (int j = n; j < S * kLanes; ++j) sbuf[r * kAttnKB + j] = -__builtin_inff();
+    }
+#pragma GCC unroll 8
+    for (int r = 0; r < R; ++r) {
+#pragma GCC unroll 4
+      for (int t = 0; t < S; ++t) mx[r] = vmax(mx[r], vload(sbuf + r * kAttnKB + t * kLanes));
+    }
+  }
+}
+
 // One group of R query rows against one key block [j0, j0 + kb): scores,
 // online-softmax update, and P V accumulated into obuf (rows of DV vectors).
+// The softmax runs in base 2: vc = scale * log2(e), so each weight is
+// 2^(vc s - m) with m the running maximum of vc s (kept in mrow); the raw
+// scores' maximum is taken in registers while they are stored, and scaling
+// and subtracting are one FMA in the exponent pass.
 template <int R, int SV, int DV>
 static inline void attn_group(int kb, int d, const float* qh, size_t ldq, const float* kp,
-                              const float* vh, size_t ldv, V vscale, const int* dcnt,
+                              const float* vh, size_t ldv, V vc, float c, const int* dcnt,
                               float* sbuf, float* obuf, float* mrow, float* lrow) {
-  constexpr int KS = SV * kLanes;
-  static_assert(kAttnKB % KS == 0, "key block must hold whole scoring sub-blocks");
-  // Scores: sbuf[r][j] = scale * q_r . k_j
-  for (int js = 0; js < kb; js += KS) {
-    V acc[R][SV];
+  static_assert(kAttnKB % (SV * kLanes) == 0, "key block must hold whole scoring sub-blocks");
+  V mx[R];
 #pragma GCC unroll 8
-    for (int r = 0; r < R; ++r) {
-#pragma GCC unroll 4
-      for (int t = 0; t < SV; ++t) acc[r][t] = vzero();
-    }
-    for (int p = 0; p < d; ++p) {
-      V kv[SV];
-#pragma GCC unroll 4
-      for (int t = 0; t < SV; ++t) kv[t] = vload(kp + size_t(p) * kAttnKB + js + t * kLanes);
-#pragma GCC unroll 8
-      for (int r = 0; r < R; ++r) {
-        const V qv = vset1(qh[size_t(r) * ldq + p]);
-#pragma GCC unroll 4
-        for (int t = 0; t < SV; ++t) acc[r][t] = vfmadd(qv, kv[t], acc[r][t]);
-      }
-    }
-#pragma GCC unroll 8
-    for (int r = 0; r < R; ++r) {
-#pragma GCC unroll 4
-      for (int t = 0; t < SV; ++t) {
-        vstore(sbuf + r * kAttnKB + js + t * kLanes, vmul(acc[r][t], vscale));
-      }
+  for (int r = 0; r < R; ++r) mx[r] = vset1(-__builtin_inff());
+  // Sub-blocks of SV vectors of keys; a block's last keys, if they fit one
+  // vector, are scored one vector wide (784 = 6 x 128 + 16 keys).
+  for (int js = 0; js < kb;) {
+    if (SV > 1 && kb - js <= kLanes) {
+      attn_score<R, 1>(d, qh, ldq, kp + js, kb - js, sbuf + js, mx);
+      js += kLanes;
+    } else {
+      attn_score<R, SV>(d, qh, ldq, kp + js, kb - js, sbuf + js, mx);
+      js += SV * kLanes;
     }
   }
   // New row maxima; the rescale factors of all R rows in one vector exp.
   const int kb_vec = (kb + kLanes - 1) / kLanes * kLanes;
   float diff[R < kLanes ? kLanes : R];
   for (int r = 0; r < R; ++r) {
-    float* srow = sbuf + r * kAttnKB;
-    for (int j = kb; j < kb_vec; ++j) srow[j] = -__builtin_inff();
-    V mx = vload(srow);
-    for (int j = kLanes; j < kb_vec; j += kLanes) mx = vmax(mx, vload(srow + j));
-    const float m_blk = vreduce_max(mx);
+    const float m_blk = vreduce_max(mx[r]) * c;
     const float m_new = mrow[r] > m_blk ? mrow[r] : m_blk;
     diff[r] = mrow[r] - m_new;
     mrow[r] = m_new;
   }
   for (int r0 = 0; r0 < R; r0 += kLanes) {
-    const int c = R - r0 < kLanes ? R - r0 : kLanes;
-    vstore_n(diff + r0, vexp(vload_n(diff + r0, c)), c);  // alpha_r
+    const int n = R - r0 < kLanes ? R - r0 : kLanes;
+    vstore_n(diff + r0, vexp2_nonpos(vload_n(diff + r0, n)), n);  // alpha_r
   }
   // Exponentiate; rescale the sums and (in registers, below) the outputs.
   for (int r = 0; r < R; ++r) {
     float* srow = sbuf + r * kAttnKB;
-    const V mv = vset1(mrow[r]);
+    const V neg_m = vset1(-mrow[r]);
     V sum = vzero();
-    int j = 0;
-    for (; j + kLanes <= kb; j += kLanes) {
-      const V e = vexp(vsub(vload(srow + j), mv));
+    for (int j = 0; j < kb_vec; j += kLanes) {
+      const V e = vexp2_nonpos(vfmadd(vload(srow + j), vc, neg_m));
       vstore(srow + j, e);
       sum = vadd(sum, e);
-    }
-    if (j < kb) {
-      const V e = vexp(vsub(vload_n(srow + j, kb - j), mv));
-      vstore_n(srow + j, e, kb - j);
-      sum = vadd(sum, vmul(e, vload_n(kOnesAttn, kb - j)));
     }
     lrow[r] = lrow[r] * diff[r] + vreduce_add(sum);
   }
@@ -123,18 +152,30 @@ static inline void attn_group(int kb, int d, const float* qh, size_t ldq, const 
 #pragma GCC unroll 4
     for (int t = 0; t < DV; ++t) oacc[r][t] = vmul(vload(obuf + (r * DV + t) * kLanes), av);
   }
-  for (int jj = 0; jj < kb; ++jj) {
-    V vv[DV];
+  // P V: a head width of whole vectors (d = 32 here) loads V unmasked.
+  if (dcnt[DV - 1] == kLanes) {
+    for (int jj = 0; jj < kb; ++jj) {
+      V vv[DV];
 #pragma GCC unroll 4
-    for (int t = 0; t < DV; ++t) {
-      vv[t] = dcnt[t] == kLanes ? vload(vh + size_t(jj) * ldv + t * kLanes)
-                                : vload_n(vh + size_t(jj) * ldv + t * kLanes, dcnt[t]);
-    }
+      for (int t = 0; t < DV; ++t) vv[t] = vload(vh + size_t(jj) * ldv + t * kLanes);
 #pragma GCC unroll 8
-    for (int r = 0; r < R; ++r) {
-      const V pv = vset1(sbuf[r * kAttnKB + jj]);
+      for (int r = 0; r < R; ++r) {
+        const V pv = vset1(sbuf[r * kAttnKB + jj]);
 #pragma GCC unroll 4
-      for (int t = 0; t < DV; ++t) oacc[r][t] = vfmadd(pv, vv[t], oacc[r][t]);
+        for (int t = 0; t < DV; ++t) oacc[r][t] = vfmadd(pv, vv[t], oacc[r][t]);
+      }
+    }
+  } else {
+    for (int jj = 0; jj < kb; ++jj) {
+      V vv[DV];
+#pragma GCC unroll 4
+      for (int t = 0; t < DV; ++t) vv[t] = vload_n(vh + size_t(jj) * ldv + t * kLanes, dcnt[t]);
+#pragma GCC unroll 8
+      for (int r = 0; r < R; ++r) {
+        const V pv = vset1(sbuf[r * kAttnKB + jj]);
+#pragma GCC unroll 4
+        for (int t = 0; t < DV; ++t) oacc[r][t] = vfmadd(pv, vv[t], oacc[r][t]);
+      }
     }
   }
 #pragma GCC unroll 8
@@ -166,7 +207,8 @@ static void attn_chunk(int rows, int kv_len, int d, const float* q, size_t ldq, 
     for (int t = 0; t < DV; ++t) vstore(obuf + (r * DV + t) * kLanes, vzero());
   }
   const float* qh = q + size_t(q0) * ldq + size_t(h) * d;
-  const V vscale = vset1(scale);
+  const float c = scale * 1.44269504088896341f;  // base-2 softmax (attn_group)
+  const V vc = vset1(c);
   for (int j0 = 0; j0 < kv_len; j0 += kAttnKB) {
     const int kb = kv_len - j0 < kAttnKB ? kv_len - j0 : kAttnKB;
     const float* kp = kt_h + size_t(j0) * d;  // block j0 / kAttnKB
@@ -174,14 +216,14 @@ static void attn_chunk(int rows, int kv_len, int d, const float* q, size_t ldq, 
     const size_t ldv = size_t(d);
     int g = 0;
     for (; g + R <= rows; g += R) {
-      attn_group<R, SV, DV>(kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vscale, dcnt,
+      attn_group<R, SV, DV>(kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vc, c, dcnt,
                             sbuf, obuf + g * DV * kLanes, mrow + g, lrow + g);
     }
     const int left = rows - g;
 #define APRT_ATTN_TAIL(RR)                                                                      \
   case RR:                                                                                      \
     if constexpr (R > RR) {                                                                     \
-      attn_group<RR, SV, DV>(kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vscale, dcnt, sbuf, \
+      attn_group<RR, SV, DV>(kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vc, c, dcnt, sbuf, \
                              obuf + g * DV * kLanes, mrow + g, lrow + g);                      \
     }                                                                                           \
     break;

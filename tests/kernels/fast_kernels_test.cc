@@ -139,7 +139,7 @@ TEST_P(FastKernels, DepthwiseConvolution) {
 
 TEST_P(FastKernels, DenseConvolution) {
   for (int round = 0; round < 40; ++round) {
-    const int k = pick(0, 2) * 2 + 1, s = pick(1, 2), h = pick(1, 11), w = pick(1, 11);
+    const int k = pick(0, 2) * 2 + 1, s = pick(1, 2), h = pick(1, 11), w = pick(1, 29);
     const int ci = pick(1, 5), co = pick(1, 80);
     const int pt = pick(0, k - 1), pl = pick(0, k - 1), pb = pick(0, k - 1), pr = pick(0, k - 1);
     if (h + pt + pb < k || w + pl + pr < k) continue;
