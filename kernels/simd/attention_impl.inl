@@ -95,6 +95,126 @@ static inline void attn_score(int d, const float* qh, size_t ldq, const float* k
   }
 }
 
+// The weights of R query rows against S vectors of keys at kp, against the
+// rows' current reference exponents m (mrow) instead of the block's maximum:
+// sbuf[r][j] = 2^(vc q_r . k_j - m_r), clamped to [2^-125, 2^126], straight
+// from the score registers. Padded keys (n and beyond) get weight 0.
+template <int R, int S>
+static inline void attn_score_exp(int d, const float* qh, size_t ldq, const float* kp, int n,
+                                  V vc, const float* mrow, float* sbuf) {
+  V acc[R][S];
+#pragma GCC unroll 8
+  for (int r = 0; r < R; ++r) {
+#pragma GCC unroll 4
+    for (int t = 0; t < S; ++t) acc[r][t] = vzero();
+  }
+  for (int p = 0; p < d; ++p) {
+    V kv[S];
+#pragma GCC unroll 4
+    for (int t = 0; t < S; ++t) kv[t] = vload(kp + size_t(p) * kAttnKB + t * kLanes);
+#pragma GCC unroll 8
+    for (int r = 0; r < R; ++r) {
+      const V qv = vset1(qh[size_t(r) * ldq + p]);
+#pragma GCC unroll 4
+      for (int t = 0; t < S; ++t) acc[r][t] = vfmadd(qv, kv[t], acc[r][t]);
+    }
+  }
+#pragma GCC unroll 8
+  for (int r = 0; r < R; ++r) {
+    const V neg_m = vset1(-mrow[r]);
+#pragma GCC unroll 4
+    for (int t = 0; t < S; ++t) {
+      const V x = vmin(vmax(vfmadd(acc[r][t], vc, neg_m), vset1(-125.0f)), vset1(126.0f));
+      vstore(sbuf + r * kAttnKB + t * kLanes, vexp2_bounded(x));
+    }
+  }
+  if (n < S * kLanes) {
+    for (int r = 0; r < R; ++r) {
+      for (int j = n; j < S * kLanes; ++j) sbuf[r * kAttnKB + j] = 0.0f;
+    }
+  }
+}
+
+// Weights of a key block that is not the rows' first, against the reference
+// exponents the earlier blocks set (the lazy rescaling of FlashAttention-2):
+// no maximum, no rescaling of sums and outputs, the exponentials taken while
+// the scores are still in registers. Exact up to rounding as long as no
+// weight overflows; a row whose block sum exceeds 2^64 (a score ~44 nats
+// above the reference: rare in a trained network, possible in any) returns
+// false with mrow and lrow untouched, and the caller redoes the block with
+// its maximum.
+template <int R, int SV>
+static inline bool attn_weights_lazy(int kb, int d, const float* qh, size_t ldq, const float* kp,
+                                     V vc, float* sbuf, const float* mrow, float* lrow) {
+  for (int js = 0; js < kb;) {
+    if (SV > 1 && kb - js <= kLanes) {
+      attn_score_exp<R, 1>(d, qh, ldq, kp + js, kb - js, vc, mrow, sbuf + js);
+      js += kLanes;
+    } else {
+      attn_score_exp<R, SV>(d, qh, ldq, kp + js, kb - js, vc, mrow, sbuf + js);
+      js += SV * kLanes;
+    }
+  }
+  const int kb_vec = (kb + kLanes - 1) / kLanes * kLanes;
+  float sums[R];
+  for (int r = 0; r < R; ++r) {
+    const float* srow = sbuf + r * kAttnKB;
+    V sum = vzero();
+    for (int j = 0; j < kb_vec; j += kLanes) sum = vadd(sum, vload(srow + j));
+    sums[r] = vreduce_add(sum);
+    if (!(sums[r] <= 0x1p64f)) return false;  // also NaN
+  }
+  for (int r = 0; r < R; ++r) lrow[r] += sums[r];
+  return true;
+}
+
+// obuf rows (R x DV vectors) = alpha_r * obuf + P V over the block's kb
+// keys, P the weights in sbuf; alpha null: no rescaling.
+template <int R, int DV>
+static inline void attn_pv(int kb, const float* vh, size_t ldv, const int* dcnt, const float* sbuf,
+                           const float* alpha, float* obuf) {
+  V oacc[R][DV];
+#pragma GCC unroll 8
+  for (int r = 0; r < R; ++r) {
+#pragma GCC unroll 4
+    for (int t = 0; t < DV; ++t) {
+      oacc[r][t] = vload(obuf + (r * DV + t) * kLanes);
+      if (alpha) oacc[r][t] = vmul(oacc[r][t], vset1(alpha[r]));
+    }
+  }
+  // P V: a head width of whole vectors (d = 32 here) loads V unmasked.
+  if (dcnt[DV - 1] == kLanes) {
+    for (int jj = 0; jj < kb; ++jj) {
+      V vv[DV];
+#pragma GCC unroll 4
+      for (int t = 0; t < DV; ++t) vv[t] = vload(vh + size_t(jj) * ldv + t * kLanes);
+#pragma GCC unroll 8
+      for (int r = 0; r < R; ++r) {
+        const V pv = vset1(sbuf[r * kAttnKB + jj]);
+#pragma GCC unroll 4
+        for (int t = 0; t < DV; ++t) oacc[r][t] = vfmadd(pv, vv[t], oacc[r][t]);
+      }
+    }
+  } else {
+    for (int jj = 0; jj < kb; ++jj) {
+      V vv[DV];
+#pragma GCC unroll 4
+      for (int t = 0; t < DV; ++t) vv[t] = vload_n(vh + size_t(jj) * ldv + t * kLanes, dcnt[t]);
+#pragma GCC unroll 8
+      for (int r = 0; r < R; ++r) {
+        const V pv = vset1(sbuf[r * kAttnKB + jj]);
+#pragma GCC unroll 4
+        for (int t = 0; t < DV; ++t) oacc[r][t] = vfmadd(pv, vv[t], oacc[r][t]);
+      }
+    }
+  }
+#pragma GCC unroll 8
+  for (int r = 0; r < R; ++r) {
+#pragma GCC unroll 4
+    for (int t = 0; t < DV; ++t) vstore(obuf + (r * DV + t) * kLanes, oacc[r][t]);
+  }
+}
+
 // One group of R query rows against one key block [j0, j0 + kb): scores,
 // online-softmax update, and P V accumulated into obuf (rows of DV vectors).
 // The softmax runs in base 2: vc = scale * log2(e), so each weight is
@@ -102,10 +222,15 @@ static inline void attn_score(int d, const float* qh, size_t ldq, const float* k
 // scores' maximum is taken in registers while they are stored, and scaling
 // and subtracting are one FMA in the exponent pass.
 template <int R, int SV, int DV>
-static inline void attn_group(int kb, int d, const float* qh, size_t ldq, const float* kp,
-                              const float* vh, size_t ldv, V vc, float c, const int* dcnt,
-                              float* sbuf, float* obuf, float* mrow, float* lrow) {
+static inline void attn_group(bool first, int kb, int d, const float* qh, size_t ldq,
+                              const float* kp, const float* vh, size_t ldv, V vc, float c,
+                              const int* dcnt, float* sbuf, float* obuf, float* mrow,
+                              float* lrow) {
   static_assert(kAttnKB % (SV * kLanes) == 0, "key block must hold whole scoring sub-blocks");
+  if (!first && attn_weights_lazy<R, SV>(kb, d, qh, ldq, kp, vc, sbuf, mrow, lrow)) {
+    attn_pv<R, DV>(kb, vh, ldv, dcnt, sbuf, nullptr, obuf);
+    return;
+  }
   V mx[R];
 #pragma GCC unroll 8
   for (int r = 0; r < R; ++r) mx[r] = vset1(-__builtin_inff());
@@ -145,44 +270,7 @@ static inline void attn_group(int kb, int d, const float* qh, size_t ldq, const 
     }
     lrow[r] = lrow[r] * diff[r] + vreduce_add(sum);
   }
-  V oacc[R][DV];
-#pragma GCC unroll 8
-  for (int r = 0; r < R; ++r) {
-    const V av = vset1(diff[r]);
-#pragma GCC unroll 4
-    for (int t = 0; t < DV; ++t) oacc[r][t] = vmul(vload(obuf + (r * DV + t) * kLanes), av);
-  }
-  // P V: a head width of whole vectors (d = 32 here) loads V unmasked.
-  if (dcnt[DV - 1] == kLanes) {
-    for (int jj = 0; jj < kb; ++jj) {
-      V vv[DV];
-#pragma GCC unroll 4
-      for (int t = 0; t < DV; ++t) vv[t] = vload(vh + size_t(jj) * ldv + t * kLanes);
-#pragma GCC unroll 8
-      for (int r = 0; r < R; ++r) {
-        const V pv = vset1(sbuf[r * kAttnKB + jj]);
-#pragma GCC unroll 4
-        for (int t = 0; t < DV; ++t) oacc[r][t] = vfmadd(pv, vv[t], oacc[r][t]);
-      }
-    }
-  } else {
-    for (int jj = 0; jj < kb; ++jj) {
-      V vv[DV];
-#pragma GCC unroll 4
-      for (int t = 0; t < DV; ++t) vv[t] = vload_n(vh + size_t(jj) * ldv + t * kLanes, dcnt[t]);
-#pragma GCC unroll 8
-      for (int r = 0; r < R; ++r) {
-        const V pv = vset1(sbuf[r * kAttnKB + jj]);
-#pragma GCC unroll 4
-        for (int t = 0; t < DV; ++t) oacc[r][t] = vfmadd(pv, vv[t], oacc[r][t]);
-      }
-    }
-  }
-#pragma GCC unroll 8
-  for (int r = 0; r < R; ++r) {
-#pragma GCC unroll 4
-    for (int t = 0; t < DV; ++t) vstore(obuf + (r * DV + t) * kLanes, oacc[r][t]);
-  }
+  attn_pv<R, DV>(kb, vh, ldv, dcnt, sbuf, diff, obuf);
 }
 
 // Query rows [q0, q0 + rows) of head h (rows <= kAttnChunk): key blocks outer,
@@ -216,14 +304,14 @@ static void attn_chunk(int rows, int kv_len, int d, const float* q, size_t ldq, 
     const size_t ldv = size_t(d);
     int g = 0;
     for (; g + R <= rows; g += R) {
-      attn_group<R, SV, DV>(kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vc, c, dcnt,
+      attn_group<R, SV, DV>(j0 == 0, kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vc, c, dcnt,
                             sbuf, obuf + g * DV * kLanes, mrow + g, lrow + g);
     }
     const int left = rows - g;
 #define APRT_ATTN_TAIL(RR)                                                                      \
   case RR:                                                                                      \
     if constexpr (R > RR) {                                                                     \
-      attn_group<RR, SV, DV>(kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vc, c, dcnt, sbuf, \
+      attn_group<RR, SV, DV>(j0 == 0, kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vc, c, dcnt, sbuf, \
                              obuf + g * DV * kLanes, mrow + g, lrow + g);                      \
     }                                                                                           \
     break;

@@ -251,6 +251,43 @@ TEST_P(FastKernels, FusedAttention) {
   }
 }
 
+// Later key blocks scoring far above the first (~180 nats here): the
+// kernel's lazily rescaled blocks must fall back to a fresh maximum instead
+// of overflowing; and a first block far above the rest (weights underflow).
+TEST_P(FastKernels, FusedAttentionScoreJumpsBetweenKeyBlocks) {
+  for (int round = 0; round < 8; ++round) {
+    const int heads = pick(1, 3), d = round < 4 ? 32 : pick(1, 40), lq = pick(1, 20);
+    const int lk = pick(ks_->attn_key_block + 1, 3 * ks_->attn_key_block + 7);
+    const int e = heads * d;
+    const AttentionShape s{lq, lk, heads, d};
+    auto q = rnd(size_t(lq) * e, 4.0f), k = rnd(size_t(lk) * e), v = rnd(size_t(lk) * e);
+    const bool rising = round % 2 == 0;
+    for (int j = 0; j < lk; ++j) {
+      const bool late = j >= ks_->attn_key_block;
+      const float gain = rising ? (late ? 40.0f : 0.05f) : (late ? 0.05f : 40.0f);
+      for (int c = 0; c < e; ++c) k[size_t(j) * e + c] *= gain;
+    }
+    const float scale = 1.0f / std::sqrt(float(d));
+    std::vector<float> want(size_t(lq) * e), got(want.size(), -3.0f),
+        rs(f32_attention__ref_scratch(s));
+    f32_attention__ref(s, q.data(), k.data(), v.data(), scale, want.data(), rs.data());
+    const int lk_pad = (lk + ks_->attn_key_block - 1) / ks_->attn_key_block * ks_->attn_key_block;
+    std::vector<float> kt(size_t(e) * lk_pad), vp(size_t(e) * lk_pad),
+        scratch(ks_->attn_scratch(d));
+    bool supported = true;
+    for (int h = 0; h < heads; ++h) {
+      ks_->attn_pack_kv(lk, lk_pad, d, k.data(), size_t(e), v.data(), size_t(e), h, kt.data(),
+                        vp.data());
+      supported &= ks_->attn_block(lq, lk, d, q.data(), size_t(e), kt.data(), vp.data(), lk_pad,
+                                   scale, got.data(), size_t(e), h, 0, scratch.data());
+    }
+    if (!supported) continue;
+    expect_near_all(got, want, 2e-5,
+                    std::string(rising ? "rising" : "falling") + " d=" + std::to_string(d) +
+                        " lk=" + std::to_string(lk));
+  }
+}
+
 // Camera frame -> network input: every pixel format, odd frame and output
 // sizes (down- and upscaling, one output pixel, a partial vector), one and
 // three channels, padded strides, random normalisation.
