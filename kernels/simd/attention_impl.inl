@@ -135,36 +135,46 @@ static inline void attn_score_exp(int d, const float* qh, size_t ldq, const floa
   }
 }
 
-// Weights of a key block that is not the rows' first, against the reference
-// exponents the earlier blocks set (the lazy rescaling of FlashAttention-2):
-// no maximum, no rescaling of sums and outputs, the exponentials taken while
-// the scores are still in registers. Exact up to rounding as long as no
-// weight overflows; a row whose block sum exceeds 2^64 (a score ~44 nats
-// above the reference: rare in a trained network, possible in any) returns
+// Weights of a key block against a fixed reference exponent instead of the
+// block's maximum (the lazy rescaling of FlashAttention-2): the rows' first
+// block against 0 (scaled scores of a trained network are within a few tens
+// of log2 units of it), later blocks against the reference the earlier ones
+// set. No maximum, no rescaling of sums and outputs, the exponentials taken
+// while the scores are still in registers. Exact up to rounding while no
+// weight overflows and the row's mass is not lost below the clamp: a row
+// whose block sum exceeds 2^64 (a score ~44 nats above the reference), or
+// whose first block sums below 2^-60 (all scores ~40 nats below 0), returns
 // false with mrow and lrow untouched, and the caller redoes the block with
 // its maximum.
 template <int R, int SV>
-static inline bool attn_weights_lazy(int kb, int d, const float* qh, size_t ldq, const float* kp,
-                                     V vc, float* sbuf, const float* mrow, float* lrow) {
+static inline bool attn_weights_lazy(bool first, int kb, int d, const float* qh, size_t ldq,
+                                     const float* kp, V vc, float* sbuf, float* mrow,
+                                     float* lrow) {
+  float ref[R];
+  for (int r = 0; r < R; ++r) ref[r] = first ? 0.0f : mrow[r];
   for (int js = 0; js < kb;) {
     if (SV > 1 && kb - js <= kLanes) {
-      attn_score_exp<R, 1>(d, qh, ldq, kp + js, kb - js, vc, mrow, sbuf + js);
+      attn_score_exp<R, 1>(d, qh, ldq, kp + js, kb - js, vc, ref, sbuf + js);
       js += kLanes;
     } else {
-      attn_score_exp<R, SV>(d, qh, ldq, kp + js, kb - js, vc, mrow, sbuf + js);
+      attn_score_exp<R, SV>(d, qh, ldq, kp + js, kb - js, vc, ref, sbuf + js);
       js += SV * kLanes;
     }
   }
   const int kb_vec = (kb + kLanes - 1) / kLanes * kLanes;
+  const float low = first ? 0x1p-60f : 0.0f;
   float sums[R];
   for (int r = 0; r < R; ++r) {
     const float* srow = sbuf + r * kAttnKB;
     V sum = vzero();
     for (int j = 0; j < kb_vec; j += kLanes) sum = vadd(sum, vload(srow + j));
     sums[r] = vreduce_add(sum);
-    if (!(sums[r] <= 0x1p64f)) return false;  // also NaN
+    if (!(sums[r] <= 0x1p64f && sums[r] >= low)) return false;  // also NaN
   }
-  for (int r = 0; r < R; ++r) lrow[r] += sums[r];
+  for (int r = 0; r < R; ++r) {
+    mrow[r] = ref[r];
+    lrow[r] += sums[r];
+  }
   return true;
 }
 
@@ -227,7 +237,7 @@ static inline void attn_group(bool first, int kb, int d, const float* qh, size_t
                               const int* dcnt, float* sbuf, float* obuf, float* mrow,
                               float* lrow) {
   static_assert(kAttnKB % (SV * kLanes) == 0, "key block must hold whole scoring sub-blocks");
-  if (!first && attn_weights_lazy<R, SV>(kb, d, qh, ldq, kp, vc, sbuf, mrow, lrow)) {
+  if (attn_weights_lazy<R, SV>(first, kb, d, qh, ldq, kp, vc, sbuf, mrow, lrow)) {
     attn_pv<R, DV>(kb, vh, ldv, dcnt, sbuf, nullptr, obuf);
     return;
   }

@@ -251,21 +251,31 @@ TEST_P(FastKernels, FusedAttention) {
   }
 }
 
-// Later key blocks scoring far above the first (~180 nats here): the
-// kernel's lazily rescaled blocks must fall back to a fresh maximum instead
-// of overflowing; and a first block far above the rest (weights underflow).
+// The kernel weighs key blocks against a fixed reference exponent (0 for a
+// row's first block) and falls back to the block's maximum when that would
+// overflow or lose the row: later key blocks scoring far above the first
+// (~180 nats here), a first block far above the rest, and every score far
+// below zero.
 TEST_P(FastKernels, FusedAttentionScoreJumpsBetweenKeyBlocks) {
-  for (int round = 0; round < 8; ++round) {
+  for (int round = 0; round < 12; ++round) {
     const int heads = pick(1, 3), d = round < 4 ? 32 : pick(1, 40), lq = pick(1, 20);
     const int lk = pick(ks_->attn_key_block + 1, 3 * ks_->attn_key_block + 7);
     const int e = heads * d;
     const AttentionShape s{lq, lk, heads, d};
     auto q = rnd(size_t(lq) * e, 4.0f), k = rnd(size_t(lk) * e), v = rnd(size_t(lk) * e);
-    const bool rising = round % 2 == 0;
+    const int kind = round % 3;  // 0 rising, 1 falling, 2 all far below zero
     for (int j = 0; j < lk; ++j) {
       const bool late = j >= ks_->attn_key_block;
-      const float gain = rising ? (late ? 40.0f : 0.05f) : (late ? 0.05f : 40.0f);
-      for (int c = 0; c < e; ++c) k[size_t(j) * e + c] *= gain;
+      const float gain = kind == 0   ? (late ? 40.0f : 0.05f)
+                         : kind == 1 ? (late ? 0.05f : 40.0f)
+                                     : 40.0f;
+      for (int c = 0; c < e; ++c) {
+        float& kv = k[size_t(j) * e + c];
+        kv = kind == 2 ? -std::fabs(kv) * gain : kv * gain;
+      }
+    }
+    if (kind == 2) {
+      for (float& x : q) x = std::fabs(x) + 0.5f;
     }
     const float scale = 1.0f / std::sqrt(float(d));
     std::vector<float> want(size_t(lq) * e), got(want.size(), -3.0f),
@@ -283,8 +293,10 @@ TEST_P(FastKernels, FusedAttentionScoreJumpsBetweenKeyBlocks) {
     }
     if (!supported) continue;
     expect_near_all(got, want, 2e-5,
-                    std::string(rising ? "rising" : "falling") + " d=" + std::to_string(d) +
-                        " lk=" + std::to_string(lk));
+                    std::string(kind == 0   ? "rising"
+                                : kind == 1 ? "falling"
+                                            : "negative") +
+                        " d=" + std::to_string(d) + " lk=" + std::to_string(lk));
   }
 }
 
