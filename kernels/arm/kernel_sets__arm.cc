@@ -11,6 +11,8 @@ void f32_conv2d__neon(const Conv2dShape&, const float*, const float*, const floa
 void f32_layernorm__neon(int, const float*, const float*, const float*, float, float*, int, int);
 void f32_add__neon(const float*, const float*, float*, size_t, size_t);
 void f32_softmax__neon(int, float*, int, int);
+void f32_cross_scores__neon(int, int, const float*, const float*, const float*, float*, size_t, int,
+                            int);
 void f32_activation__neon(Act, const float*, float*, size_t, size_t);
 void f32_se_gate__neon(int, int, int, const float*, const float*, const float*, const float*,
                        const float*, float*, float*);
@@ -35,6 +37,7 @@ const KernelSet kNeon = {
     f32_layernorm__neon,
     f32_add__neon,
     f32_softmax__neon,
+    f32_cross_scores__neon,
     f32_activation__neon,
     f32_se_gate__neon,
     f32_se_scale__neon,

@@ -31,6 +31,10 @@ struct KernelSet {
   void (*add)(const float* a, const float* b, float* y, size_t i0, size_t i1);
   // In-place softmax of rows [r0, r1) of an [rows][n] matrix.
   void (*softmax_rows)(int n, float* x, int r0, int r1);
+  // Single-query attention scores s[h * ls + j] = qt_h . (m_j + pos_j) of
+  // memory rows [j0, j1) (pos may be null; kernels/ref/f32_cross_attention_1q__ref.h).
+  void (*cross_scores)(int e, int heads, const float* m, const float* pos, const float* qt,
+                       float* s, size_t ls, int j0, int j1);
   void (*activation)(Act act, const float* x, float* y, size_t i0, size_t i1);
   // Squeeze-excite: the per-channel gate (W2 transposed: [Cr][C]); scratch C + Cr floats.
   void (*se_gate)(int pixels, int c, int cr, const float* x, const float* w1, const float* b1,

@@ -51,4 +51,18 @@ void f32_cross_attention_1q__ref(int kv_len, int heads, int e, const float* q, c
   }
 }
 
+void f32_cross_scores__ref(int e, int heads, const float* m, const float* pos, const float* qt,
+                           float* s, size_t ls, int j0, int j1) {
+  for (int j = j0; j < j1; ++j) {
+    const float* mr = m + size_t(j) * e;
+    const float* pr = pos ? pos + size_t(j) * e : nullptr;
+    for (int h = 0; h < heads; ++h) {
+      const float* qh = qt + size_t(h) * e;
+      float acc = 0.0f;
+      for (int c = 0; c < e; ++c) acc += qh[c] * (pr ? mr[c] + pr[c] : mr[c]);
+      s[size_t(h) * ls + j] = acc;
+    }
+  }
+}
+
 }  // namespace aprt::kernels

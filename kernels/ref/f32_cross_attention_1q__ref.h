@@ -16,4 +16,10 @@ void f32_cross_attention_1q__ref(int kv_len, int heads, int e, const float* q, c
                                  const float* pos, const float* wk, const float* wv,
                                  const float* bv, float scale, float* o, float* scratch);
 
+// The scores of the single-query attention, for memory rows [j0, j1):
+//   s[h * ls + j] = qt_h . (m_j + pos_j)      (pos may be null)
+// qt [heads][E], m and pos [rows][E]. The fast kernels' twin (KernelSet::cross_scores).
+void f32_cross_scores__ref(int e, int heads, const float* m, const float* pos, const float* qt,
+                           float* s, size_t ls, int j0, int j1);
+
 }  // namespace aprt::kernels

@@ -25,6 +25,10 @@ void f32_add__avx512(const float* a, const float* b, float* y, size_t i0, size_t
 void f32_softmax__avx512(int n, float* x, int r0, int r1) {
   avx512::softmax_rows(n, x, r0, r1);
 }
+void f32_cross_scores__avx512(int e, int heads, const float* m, const float* pos, const float* qt,
+                              float* s, size_t ls, int j0, int j1) {
+  avx512::cross_scores(e, heads, m, pos, qt, s, ls, j0, j1);
+}
 void f32_activation__avx512(Act act, const float* x, float* y, size_t i0, size_t i1) {
   avx512::activation_range(int(act), x, y, i0, i1);
 }

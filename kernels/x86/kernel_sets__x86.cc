@@ -13,6 +13,8 @@ void f32_layernorm__avx512(int, const float*, const float*, const float*, float,
 void f32_add__avx512(const float*, const float*, float*, size_t, size_t);
 void f32_activation__avx512(Act, const float*, float*, size_t, size_t);
 void f32_softmax__avx512(int, float*, int, int);
+void f32_cross_scores__avx512(int, int, const float*, const float*, const float*, float*, size_t,
+                              int, int);
 void f32_se_gate__avx512(int, int, int, const float*, const float*, const float*, const float*,
                          const float*, float*, float*);
 void f32_se_scale__avx512(int, const float*, const float*, float*, int, int);
@@ -31,6 +33,8 @@ void f32_layernorm__avx2(int, const float*, const float*, const float*, float, f
 void f32_add__avx2(const float*, const float*, float*, size_t, size_t);
 void f32_activation__avx2(Act, const float*, float*, size_t, size_t);
 void f32_softmax__avx2(int, float*, int, int);
+void f32_cross_scores__avx2(int, int, const float*, const float*, const float*, float*, size_t, int,
+                            int);
 void f32_se_gate__avx2(int, int, int, const float*, const float*, const float*, const float*,
                        const float*, float*, float*);
 void f32_se_scale__avx2(int, const float*, const float*, float*, int, int);
@@ -55,6 +59,7 @@ const KernelSet kAvx512 = {
     f32_layernorm__avx512,
     f32_add__avx512,
     f32_softmax__avx512,
+    f32_cross_scores__avx512,
     f32_activation__avx512,
     f32_se_gate__avx512,
     f32_se_scale__avx512,
@@ -78,6 +83,7 @@ const KernelSet kAvx2 = {
     f32_layernorm__avx2,
     f32_add__avx2,
     f32_softmax__avx2,
+    f32_cross_scores__avx2,
     f32_activation__avx2,
     f32_se_gate__avx2,
     f32_se_scale__avx2,

@@ -11,6 +11,7 @@
 #include "kernels/common/kernel_set.h"
 #include "kernels/ref/f32_attention__ref.h"
 #include "kernels/ref/f32_conv2d__ref.h"
+#include "kernels/ref/f32_cross_attention_1q__ref.h"
 #include "kernels/ref/f32_dwconv2d__ref.h"
 #include "kernels/ref/f32_elementwise__ref.h"
 #include "kernels/ref/f32_layernorm__ref.h"
@@ -297,6 +298,26 @@ TEST_P(FastKernels, FusedAttentionScoreJumpsBetweenKeyBlocks) {
                                 : kind == 1 ? "falling"
                                             : "negative") +
                         " d=" + std::to_string(d) + " lk=" + std::to_string(lk));
+  }
+}
+
+// Single-query attention scores: odd widths (partial vectors and chunks),
+// head counts around the kernel's group of eight, with and without
+// positions, a row range inside a padded score matrix.
+TEST_P(FastKernels, CrossAttentionScores) {
+  for (int round = 0; round < 30; ++round) {
+    const int heads = pick(1, 19), e = round < 3 ? 256 : pick(1, 300), rows = pick(1, 50);
+    const int j0 = pick(0, rows - 1), j1 = pick(j0 + 1, rows);
+    const size_t ls = size_t(rows) + pick(0, 3);
+    const bool with_pos = round % 3 != 0;
+    const auto m = rnd(size_t(rows) * e), p = rnd(size_t(rows) * e), qt = rnd(size_t(heads) * e);
+    std::vector<float> want(size_t(heads) * ls, -7.0f), got(want);
+    f32_cross_scores__ref(e, heads, m.data(), with_pos ? p.data() : nullptr, qt.data(), want.data(),
+                          ls, j0, j1);
+    ks_->cross_scores(e, heads, m.data(), with_pos ? p.data() : nullptr, qt.data(), got.data(), ls,
+                      j0, j1);
+    expect_near_all(got, want, 2e-5 * std::sqrt(float(e)),
+                    "cross scores e=" + std::to_string(e) + " heads=" + std::to_string(heads));
   }
 }
 

@@ -3,8 +3,9 @@
 // inputs: Q [1,E], M [L,E], P [L,E] or absent, Wk [E,E], bk [E], Wv [E,E], bv [E]
 // params: heads, scale (f32 bits)
 // Fast path, in the op's scratch: qt = scale W_k^T q per head (GEMM per head),
-// X = M + P, scores^T = X qt^T, softmax per head, Z = A M, o_h = W_v,h z_h + b_v,h
-// (Wv packed at load). Costs O(L E H) instead of the projections' O(L E^2).
+// scores s_h,j = qt_h . (m_j + p_j) in one pass over M and P (cross_scores),
+// softmax per head, Z = A M, o_h = W_v,h z_h + b_v,h (Wv packed at load).
+// Costs O(L E H) instead of the projections' O(L E^2).
 #include <cstring>
 
 #include "kernels/ref/f32_cross_attention_1q__ref.h"
@@ -17,11 +18,9 @@ namespace {
 struct CrossState {
   int kv_len, heads, e;
   float scale;
-  // Scratch layout (floats): qs [E] | qt [H][E] | qtT [E][H] | X [L][E] | sT [L][H] | s [H][L] | z
-  // [H][E]
-  size_t off_qt, off_qtt, off_x, off_st, off_s, off_z;
-  Split x_split;           // elements of X = M + P
-  Split s_rows, s_panels;  // scores^T GEMM
+  // Scratch layout (floats): qs [E] | qt [H][E] | s [H][L] | z [H][E]
+  size_t off_qt, off_s, off_z;
+  Split s_split;           // memory rows of the scores
   Split z_rows, z_panels;  // Z GEMM
 };
 
@@ -44,11 +43,13 @@ struct CrossTask {
   const Split* panels;
 };
 
-void add_task(void* data, int task, int) {
+void scores_task(void* data, int task, int) {
   const auto* t = static_cast<const CrossTask*>(data);
   const auto& s = t->node->state_as<CrossState>();
-  t->node->ks->add(t->node->in[1]->f32(), pos_of(*t->node), t->ctx->scratch + s.off_x,
-                   size_t(s.x_split.begin(task)), size_t(s.x_split.end(task)));
+  const float* base = t->ctx->scratch;
+  t->node->ks->cross_scores(s.e, s.heads, t->node->in[1]->f32(), pos_of(*t->node), base + s.off_qt,
+                            t->ctx->scratch + s.off_s, size_t(s.kv_len), s.s_split.begin(task),
+                            s.s_split.end(task));
 }
 
 void gemm_task(void* data, int task, int) {
@@ -66,8 +67,6 @@ void eval_cross_fast(const OpNode& node, const RunContext& ctx) {
   float* base = ctx.scratch;
   float* qs = base;
   float* qt = base + s.off_qt;
-  float* qtt = base + s.off_qtt;
-  float* st = base + s.off_st;
   float* sm = base + s.off_s;
   float* z = base + s.off_z;
   const float* q = node.in[0]->f32();
@@ -91,26 +90,9 @@ void eval_cross_fast(const OpNode& node, const RunContext& ctx) {
                               kernels::Act::kNone};
     ks.gemm(g, 0, 1, 0, int((size_t(e) + nr - 1) / nr));
   }
-  for (int h = 0; h < h_count; ++h) {
-    for (int c = 0; c < e; ++c) qtt[size_t(c) * h_count + h] = qt[size_t(h) * e + c];
-  }
-  const float* keys = node.in[1]->f32();
-  if (pos_of(node)) {
+  {  // s [H][L]: qt_h . (m_j + p_j)
     CrossTask t{&node, &ctx, {}, nullptr, nullptr};
-    parallel_for(ctx, s.x_split.tasks, add_task, &t);
-    keys = base + s.off_x;
-  }
-  {  // scores^T [L][H] = keys [L][E] x qt^T [E][H]
-    CrossTask t{&node,
-                &ctx,
-                {l, h_count, e, keys, size_t(e), qtt, size_t(h_count), nr, false, nullptr, nullptr,
-                 0, st, size_t(h_count), kernels::Act::kNone},
-                &s.s_rows,
-                &s.s_panels};
-    parallel_for(ctx, s.s_rows.tasks * s.s_panels.tasks, gemm_task, &t);
-  }
-  for (int j = 0; j < l; ++j) {
-    for (int h = 0; h < h_count; ++h) sm[size_t(h) * l + j] = st[size_t(j) * h_count + h];
+    parallel_for(ctx, s.s_split.tasks, scores_task, &t);
   }
   ks.softmax_rows(l, sm, 0, h_count);
   {  // Z [H][E] = A [H][L] x M [L][E]
@@ -195,17 +177,11 @@ Status prepare_cross_attention_1q(OpNode& node) {
   const bool fast = node.ks && (e / heads) % node.ks->gemm_nr == 0;
   if (fast) {
     s.off_qt = ee;
-    s.off_qtt = s.off_qt + h * ee;
-    s.off_x = s.off_qtt + h * ee;
-    s.off_st = s.off_x + (node.in[2] ? l * ee : 0);
-    s.off_s = s.off_st + l * h;
+    s.off_s = s.off_qt + h * ee;
     s.off_z = s.off_s + l * h;
     node.scratch_floats = s.off_z + h * ee;
     const int threads = node.threads;
-    int tasks = threads <= 1 ? 1 : 2 * threads;
-    s.x_split = make_split(int(l * ee), 64, tasks);
-    split_gemm(s.kv_len, heads, e, node.ks->gemm_mr, node.ks->gemm_nr, threads, &s.s_rows,
-               &s.s_panels);
+    s.s_split = make_split(s.kv_len, 1, threads <= 1 ? 1 : 2 * threads);
     split_gemm(heads, e, s.kv_len, node.ks->gemm_mr, node.ks->gemm_nr, threads, &s.z_rows,
                &s.z_panels);
     node.packed_floats = kernels::f32_pack_b_floats(e, e, node.ks->gemm_nr);
