@@ -5,6 +5,8 @@
 
 using V = __m512;
 inline constexpr int kLanes = 16;
+// vscale2(p, n) is exact for any integral n (vscalefps saturates: 0 below the range, inf above).
+inline constexpr bool kScale2AnyExponent = true;
 
 static inline V vzero() {
   return _mm512_setzero_ps();
