@@ -59,41 +59,75 @@ void gemm_task(void* data, int task, int) {
                     t->panels->end(pt));
 }
 
+// qt_h = (scale q_h) W_k,h for head `task`: A = [1][d], B = rows h*d.. of Wk
+// as a row-major [d][E]. One head per task: these single-row products are
+// bound by streaming the weights, which two cores do faster than one.
+void qt_task(void* data, int h, int) {
+  const auto* t = static_cast<const CrossTask*>(data);
+  const OpNode& node = *t->node;
+  const auto& s = node.state_as<CrossState>();
+  const int e = s.e, d = e / s.heads;
+  const size_t nr = size_t(node.ks->gemm_nr);
+  float* qs = t->ctx->scratch;
+  const kernels::GemmArgs g{1,
+                            e,
+                            d,
+                            qs + h * d,
+                            size_t(d),
+                            node.in[3]->f32() + size_t(h) * d * e,
+                            size_t(e),
+                            nr,
+                            false,
+                            nullptr,
+                            nullptr,
+                            0,
+                            t->ctx->scratch + s.off_qt + size_t(h) * e,
+                            size_t(e),
+                            kernels::Act::kNone};
+  node.ks->gemm(g, 0, 1, 0, int((size_t(e) + nr - 1) / nr));
+}
+
+// o_h = z_h W_v,h^T + b_v,h over the packed Wv panels of head `task`.
+void out_task(void* data, int h, int) {
+  const auto* t = static_cast<const CrossTask*>(data);
+  const OpNode& node = *t->node;
+  const auto& s = node.state_as<CrossState>();
+  const int e = s.e, d = e / s.heads;
+  const size_t nr = size_t(node.ks->gemm_nr);
+  const int panels_per_head = d / node.ks->gemm_nr;
+  const kernels::GemmArgs g{1,
+                            e,
+                            e,
+                            t->ctx->scratch + s.off_z + size_t(h) * e,
+                            size_t(e),
+                            node.packed,
+                            nr,
+                            size_t(e) * nr,
+                            true,
+                            node.in[6]->f32(),
+                            nullptr,
+                            0,
+                            node.out[0]->f32(),
+                            size_t(e),
+                            kernels::Act::kNone};
+  node.ks->gemm(g, 0, 1, h * panels_per_head, (h + 1) * panels_per_head);
+}
+
 void eval_cross_fast(const OpNode& node, const RunContext& ctx) {
   const auto& s = node.state_as<CrossState>();
   const kernels::KernelSet& ks = *node.ks;
-  const int e = s.e, h_count = s.heads, d = e / h_count, l = s.kv_len;
+  const int e = s.e, h_count = s.heads, l = s.kv_len;
   const size_t nr = size_t(ks.gemm_nr);
   float* base = ctx.scratch;
   float* qs = base;
-  float* qt = base + s.off_qt;
   float* sm = base + s.off_s;
   float* z = base + s.off_z;
   const float* q = node.in[0]->f32();
   for (int c = 0; c < e; ++c) qs[c] = q[c] * s.scale;
-  // qt_h = (scale q_h) W_k,h: A = [1][d], B = rows h*d.. of Wk as a row-major [d][E].
-  for (int h = 0; h < h_count; ++h) {
-    const kernels::GemmArgs g{1,
-                              e,
-                              d,
-                              qs + h * d,
-                              size_t(d),
-                              node.in[3]->f32() + size_t(h) * d * e,
-                              size_t(e),
-                              nr,
-                              false,
-                              nullptr,
-                              nullptr,
-                              0,
-                              qt + size_t(h) * e,
-                              size_t(e),
-                              kernels::Act::kNone};
-    ks.gemm(g, 0, 1, 0, int((size_t(e) + nr - 1) / nr));
-  }
-  {  // s [H][L]: qt_h . (m_j + p_j)
-    CrossTask t{&node, &ctx, {}, nullptr, nullptr};
-    parallel_for(ctx, s.s_split.tasks, scores_task, &t);
-  }
+  CrossTask heads{&node, &ctx, {}, nullptr, nullptr};
+  parallel_for(ctx, h_count, qt_task, &heads);
+  // s [H][L]: qt_h . (m_j + p_j)
+  parallel_for(ctx, s.s_split.tasks, scores_task, &heads);
   ks.softmax_rows(l, sm, 0, h_count);
   {  // Z [H][E] = A [H][L] x M [L][E]
     CrossTask t{&node,
@@ -104,27 +138,7 @@ void eval_cross_fast(const OpNode& node, const RunContext& ctx) {
                 &s.z_panels};
     parallel_for(ctx, s.z_rows.tasks * s.z_panels.tasks, gemm_task, &t);
   }
-  // o_h = z_h W_v,h^T + b_v,h over the packed Wv panels of head h.
-  float* o = node.out[0]->f32();
-  const int panels_per_head = d / ks.gemm_nr;
-  for (int h = 0; h < h_count; ++h) {
-    const kernels::GemmArgs g{1,
-                              e,
-                              e,
-                              z + size_t(h) * e,
-                              size_t(e),
-                              node.packed,
-                              nr,
-                              size_t(e) * nr,
-                              true,
-                              node.in[6]->f32(),
-                              nullptr,
-                              0,
-                              o,
-                              size_t(e),
-                              kernels::Act::kNone};
-    ks.gemm(g, 0, 1, h * panels_per_head, (h + 1) * panels_per_head);
-  }
+  parallel_for(ctx, h_count, out_task, &heads);
 }
 
 void pack_wv(OpNode& node) {

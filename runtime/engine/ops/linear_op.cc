@@ -58,6 +58,13 @@ void split_gemm(int m, int n, int k, int mr, int nr, int threads, Split* rows, S
   const int panel_count = (n + nr - 1) / nr;
   const long long work = static_cast<long long>(m) * n * k;
   int want = threads <= 1 ? 1 : int(work / 65536);
+  // A product of a few rows is bound by streaming its weights (the decoders'
+  // single-token layers: 256 KB each, cold every frame): split its panels so
+  // that every core pulls its share.
+  if (threads > 1 && want < threads && static_cast<long long>(n) * k >= 32768 &&
+      panel_count >= threads) {
+    want = threads;
+  }
   want = want < 1 ? 1 : (want > 4 * threads ? 4 * threads : want);
   const int row_tiles = (m + mr - 1) / mr;
   if (row_tiles >= want) {
