@@ -3,8 +3,7 @@
 
 using V = __m256;
 inline constexpr int kLanes = 8;
-// vscale2(p, n) is exact for any integral n (exponent-field arithmetic: n must stay in [-126,
-// 127]).
+// vscale2 adds n to the exponent field: n must stay in [-126, 127].
 inline constexpr bool kScale2AnyExponent = false;
 
 static inline V vzero() {

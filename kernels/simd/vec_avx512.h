@@ -5,7 +5,7 @@
 
 using V = __m512;
 inline constexpr int kLanes = 16;
-// vscale2(p, n) is exact for any integral n (vscalefps saturates: 0 below the range, inf above).
+// vscale2(p, n) takes any integral n (vscalefps saturates to 0 or inf).
 inline constexpr bool kScale2AnyExponent = true;
 
 static inline V vzero() {

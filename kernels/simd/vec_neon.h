@@ -4,8 +4,7 @@
 
 using V = float32x4_t;
 inline constexpr int kLanes = 4;
-// vscale2(p, n) is exact for any integral n (exponent-field arithmetic: n must stay in [-126,
-// 127]).
+// vscale2 adds n to the exponent field: n must stay in [-126, 127].
 inline constexpr bool kScale2AnyExponent = false;
 
 static inline V vzero() {
