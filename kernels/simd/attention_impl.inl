@@ -27,7 +27,13 @@ static void attn_pack_kv(int kv_len, int lk_pad, int d, const float* k, size_t l
   for (size_t i = size_t(kv_len) * d; i < size_t(lk_pad) * d; ++i) vdst[i] = 0.0f;
   // K^T in blocks of kAttnKB keys: a key's row is read once and scattered
   // down its block column (reading columns instead, 1 KB apart, thrashes L1).
-  for (int j = 0; j < lk_pad; ++j) {
+  // An ISA with a register transpose does whole 16 x 16 tiles first and
+  // leaves the rest here (attn_pack_kt_tiles, AVX-512).
+  int j = 0;
+#ifdef APRT_ATTN_PACK_KT_TILES
+  j = attn_pack_kt_tiles(kv_len, d, k, ldk, h, kdst);
+#endif
+  for (; j < lk_pad; ++j) {
     float* kb = kdst + size_t(j / kAttnKB) * d * kAttnKB + j % kAttnKB;
     if (j < kv_len) {
       const float* kr = k + size_t(j) * ldk + size_t(h) * d;
