@@ -3,8 +3,6 @@
 
 using V = __m256;
 inline constexpr int kLanes = 8;
-// vscale2 adds n to the exponent field: n must stay in [-126, 127].
-inline constexpr bool kScale2AnyExponent = false;
 
 static inline V vzero() {
   return _mm256_setzero_ps();

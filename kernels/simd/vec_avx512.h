@@ -5,8 +5,6 @@
 
 using V = __m512;
 inline constexpr int kLanes = 16;
-// vscale2(p, n) takes any integral n (vscalefps saturates to 0 or inf).
-inline constexpr bool kScale2AnyExponent = true;
 
 static inline V vzero() {
   return _mm512_setzero_ps();

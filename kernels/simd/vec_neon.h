@@ -4,8 +4,6 @@
 
 using V = float32x4_t;
 inline constexpr int kLanes = 4;
-// vscale2 adds n to the exponent field: n must stay in [-126, 127].
-inline constexpr bool kScale2AnyExponent = false;
 
 static inline V vzero() {
   return vdupq_n_f32(0.0f);
