@@ -53,15 +53,10 @@ static inline size_t attn_thread_scratch(int rows, int dv) {
   return size_t(rows) * kAttnKB + size_t(kAttnChunk) * (size_t(dv) * kLanes + 2);
 }
 
-// Raw scores of R query rows against S vectors of keys starting at kp (a
-// column of a packed K^T block): sbuf[r][j] = q_r . k_j for j < S * kLanes,
-// and the rows' running maxima mx. Keys at n and beyond are zero padding:
-// their scores become -inf, out of the maximum and weighted 2^-125 (below any
-// row sum's rounding) in the exponent pass.
+// acc[r][t] = q_r . k_j for the S vectors of keys starting at kp (a column
+// of a packed K^T block): K^T rows loaded as vectors, q broadcast.
 template <int R, int S>
-static inline void attn_score(int d, const float* qh, size_t ldq, const float* kp, int n,
-                              float* sbuf, V* mx) {
-  V acc[R][S];
+static inline void attn_dots(int d, const float* qh, size_t ldq, const float* kp, V (*acc)[S]) {
 #pragma GCC unroll 8
   for (int r = 0; r < R; ++r) {
 #pragma GCC unroll 4
@@ -78,6 +73,18 @@ static inline void attn_score(int d, const float* qh, size_t ldq, const float* k
       for (int t = 0; t < S; ++t) acc[r][t] = vfmadd(qv, kv[t], acc[r][t]);
     }
   }
+}
+
+// Raw scores of R query rows against S vectors of keys starting at kp (a
+// column of a packed K^T block): sbuf[r][j] = q_r . k_j for j < S * kLanes,
+// and the rows' running maxima mx. Keys at n and beyond are zero padding:
+// their scores become -inf, out of the maximum and weighted 2^-125 (below any
+// row sum's rounding) in the exponent pass.
+template <int R, int S>
+static inline void attn_score(int d, const float* qh, size_t ldq, const float* kp, int n,
+                              float* sbuf, V* mx) {
+  V acc[R][S];
+  attn_dots<R, S>(d, qh, ldq, kp, acc);
 #pragma GCC unroll 8
   for (int r = 0; r < R; ++r) {
 #pragma GCC unroll 4
@@ -109,22 +116,7 @@ template <int R, int S>
 static inline void attn_score_exp(int d, const float* qh, size_t ldq, const float* kp, int n,
                                   V vc, const float* mrow, float* sbuf) {
   V acc[R][S];
-#pragma GCC unroll 8
-  for (int r = 0; r < R; ++r) {
-#pragma GCC unroll 4
-    for (int t = 0; t < S; ++t) acc[r][t] = vzero();
-  }
-  for (int p = 0; p < d; ++p) {
-    V kv[S];
-#pragma GCC unroll 4
-    for (int t = 0; t < S; ++t) kv[t] = vload(kp + size_t(p) * kAttnKB + t * kLanes);
-#pragma GCC unroll 8
-    for (int r = 0; r < R; ++r) {
-      const V qv = vset1(qh[size_t(r) * ldq + p]);
-#pragma GCC unroll 4
-      for (int t = 0; t < S; ++t) acc[r][t] = vfmadd(qv, kv[t], acc[r][t]);
-    }
-  }
+  attn_dots<R, S>(d, qh, ldq, kp, acc);
 #pragma GCC unroll 8
   for (int r = 0; r < R; ++r) {
     const V neg_m = vset1(-mrow[r]);

@@ -216,6 +216,29 @@ TEST_P(FastKernels, SqueezeExcite) {
   }
 }
 
+// The fast attention as the ATTENTION op runs it: K and V packed per head,
+// then every (head, query chunk). false if the kernel refused the head width.
+bool fast_attention(const KernelSet& ks, const AttentionShape& s, const std::vector<float>& q,
+                    const std::vector<float>& k, const std::vector<float>& v, float scale,
+                    std::vector<float>* out) {
+  const int e = s.heads * s.head_dim, d = s.head_dim, lk = s.kv_len, lq = s.q_len;
+  const int lk_pad = (lk + ks.attn_key_block - 1) / ks.attn_key_block * ks.attn_key_block;
+  std::vector<float> kt(size_t(e) * lk_pad), vp(size_t(e) * lk_pad), scratch(ks.attn_scratch(d));
+  bool supported = true;
+  for (int h = 0; h < s.heads; ++h) {
+    ks.attn_pack_kv(lk, lk_pad, d, k.data(), size_t(e), v.data(), size_t(e), h, kt.data(),
+                    vp.data());
+  }
+  for (int h = 0; h < s.heads; ++h) {
+    for (int q0 = 0; q0 < lq; q0 += ks.attn_max_rows) {
+      const int rows = lq - q0 < ks.attn_max_rows ? lq - q0 : ks.attn_max_rows;
+      supported &= ks.attn_block(rows, lk, d, q.data(), size_t(e), kt.data(), vp.data(), lk_pad,
+                                 scale, out->data(), size_t(e), h, q0, scratch.data());
+    }
+  }
+  return supported;
+}
+
 TEST_P(FastKernels, FusedAttention) {
   for (int round = 0; round < 40; ++round) {
     const int heads = pick(1, 8), d = round < 4 ? 32 : pick(1, 64), lq = pick(1, 40);
@@ -228,21 +251,7 @@ TEST_P(FastKernels, FusedAttention) {
     std::vector<float> want(size_t(lq) * e), got(want.size(), -3.0f),
         rs(f32_attention__ref_scratch(s));
     f32_attention__ref(s, q.data(), k.data(), v.data(), scale, want.data(), rs.data());
-    const int lk_pad = (lk + ks_->attn_key_block - 1) / ks_->attn_key_block * ks_->attn_key_block;
-    std::vector<float> kt(size_t(e) * lk_pad), vp(size_t(e) * lk_pad),
-        scratch(ks_->attn_scratch(d));
-    for (int h = 0; h < heads; ++h) {
-      ks_->attn_pack_kv(lk, lk_pad, d, k.data(), size_t(e), v.data(), size_t(e), h, kt.data(),
-                        vp.data());
-    }
-    bool supported = true;
-    for (int h = 0; h < heads; ++h) {
-      for (int q0 = 0; q0 < lq; q0 += ks_->attn_max_rows) {
-        const int rows = lq - q0 < ks_->attn_max_rows ? lq - q0 : ks_->attn_max_rows;
-        supported &= ks_->attn_block(rows, lk, d, q.data(), size_t(e), kt.data(), vp.data(), lk_pad,
-                                     scale, got.data(), size_t(e), h, q0, scratch.data());
-      }
-    }
+    const bool supported = fast_attention(*ks_, s, q, k, v, scale, &got);
     if (!supported) {
       EXPECT_GT(d, 8 * ks_->lanes) << "refused a head width it should handle";
       continue;
@@ -282,17 +291,7 @@ TEST_P(FastKernels, FusedAttentionScoreJumpsBetweenKeyBlocks) {
     std::vector<float> want(size_t(lq) * e), got(want.size(), -3.0f),
         rs(f32_attention__ref_scratch(s));
     f32_attention__ref(s, q.data(), k.data(), v.data(), scale, want.data(), rs.data());
-    const int lk_pad = (lk + ks_->attn_key_block - 1) / ks_->attn_key_block * ks_->attn_key_block;
-    std::vector<float> kt(size_t(e) * lk_pad), vp(size_t(e) * lk_pad),
-        scratch(ks_->attn_scratch(d));
-    bool supported = true;
-    for (int h = 0; h < heads; ++h) {
-      ks_->attn_pack_kv(lk, lk_pad, d, k.data(), size_t(e), v.data(), size_t(e), h, kt.data(),
-                        vp.data());
-      supported &= ks_->attn_block(lq, lk, d, q.data(), size_t(e), kt.data(), vp.data(), lk_pad,
-                                   scale, got.data(), size_t(e), h, 0, scratch.data());
-    }
-    if (!supported) continue;
+    if (!fast_attention(*ks_, s, q, k, v, scale, &got)) continue;
     expect_near_all(got, want, 2e-5,
                     std::string(kind == 0   ? "rising"
                                 : kind == 1 ? "falling"
