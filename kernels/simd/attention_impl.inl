@@ -1,10 +1,13 @@
 // Fused multi-head attention with an online softmax (the FlashAttention
-// scheme): for a block of R query rows, key blocks of KB keys are scored into
-// a small buffer, the running row maximum and sum are updated, and the output
-// rows are rescaled and accumulated. No Lq x Lk matrix is ever stored.
+// scheme): for a group of R query rows, key blocks of kAttnKB keys are scored
+// and weighed into a small buffer, the row sums are updated and P V is
+// accumulated into the output rows. No Lq x Lk matrix is ever stored. The
+// weights are base-2 exponentials against a fixed reference exponent per row
+// (attn_weights_lazy); a block that would overflow or underflow it is redone
+// against its own maximum with the sums and outputs rescaled (attn_group).
 // K and V are first packed per head (attn_pack_kv): K^T so that keys are the
-// vector dimension of the scoring loop, both contiguous per key block. Included inside an ISA
-// namespace (after vmath.inl).
+// vector dimension of the scoring loop, both contiguous per key block.
+// Included inside an ISA namespace (after vmath.inl).
 
 constexpr int kAttnKB = 128;  // keys per softmax block
 

@@ -107,13 +107,11 @@ template <int P>
 static inline void conv_block(const Conv2dShape& s, const float* x, const float* wp,
                               const float* bias, const float* res, int act, float* out, int iy0,
                               int ix0, int c0, int cn) {
-#define APRT_CONV_NV(NVV)                                                                  \
-  if (cn == NVV * kLanes) {                                                                \
-    conv_pixels<NVV, (NVV <= 2 ? P : P / 2), true>(s, x, wp, bias, res, act, out, iy0, ix0, \
-                                                   c0, cn);                                \
-  } else {                                                                                 \
-    conv_pixels<NVV, (NVV <= 2 ? P : P / 2), false>(s, x, wp, bias, res, act, out, iy0,    \
-                                                    ix0, c0, cn);                          \
+#define APRT_CONV_NV(NVV)                                                                   \
+  if (cn == NVV * kLanes) {                                                                 \
+    conv_pixels<NVV, P, true>(s, x, wp, bias, res, act, out, iy0, ix0, c0, cn);             \
+  } else {                                                                                  \
+    conv_pixels<NVV, P, false>(s, x, wp, bias, res, act, out, iy0, ix0, c0, cn);            \
   }
   if (cn <= kLanes) {
     APRT_CONV_NV(1)
@@ -129,7 +127,6 @@ static void conv_rows(const Conv2dShape& s, const float* x, const float* wp, con
                       const float* residual, int act, float* y, int oy0, int oy1) {
   const int Co = s.out_c;
   constexpr int kBlock = 4 * kLanes;
-  constexpr int kP = 4;  // pixels per interior block; halved for 4-vector channel blocks
   // Interior columns [ox_lo, ox_hi): every tap inside the input row.
   const int ox_lo = (s.pad_left + s.stride_w - 1) / s.stride_w;
   int ox_hi = (s.in_w - s.kernel_w + s.pad_left) >= 0
@@ -140,15 +137,20 @@ static void conv_rows(const Conv2dShape& s, const float* x, const float* wp, con
     const int iy0 = oy * s.stride_h - s.pad_top;
     for (int c0 = 0; c0 < Co; c0 += kBlock) {
       const int cn = Co - c0 < kBlock ? Co - c0 : kBlock;
-      // Pixels per block at this channel width (conv_block halves P for 4 vectors).
-      const int step = cn <= 2 * kLanes ? kP : kP / 2;
+      // Pixels per interior block: four, two for 4-vector channel blocks
+      // (P x NV accumulators must leave registers for the weights).
+      const int step = cn <= 2 * kLanes ? 4 : 2;
       int ox = 0;
       while (ox < s.out_w) {
         const size_t o = (size_t(oy) * s.out_w + ox) * Co;
         const int ix0 = ox * s.stride_w - s.pad_left;
         const float* res = residual ? residual + o : nullptr;
         if (ox >= ox_lo && ox + step <= ox_hi) {
-          conv_block<kP>(s, x, wp, bias, res, act, y + o, iy0, ix0, c0, cn);
+          if (step == 4) {
+            conv_block<4>(s, x, wp, bias, res, act, y + o, iy0, ix0, c0, cn);
+          } else {
+            conv_block<2>(s, x, wp, bias, res, act, y + o, iy0, ix0, c0, cn);
+          }
           ox += step;
           continue;
         }

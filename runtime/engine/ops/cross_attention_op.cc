@@ -46,9 +46,9 @@ struct CrossTask {
 void scores_task(void* data, int task, int) {
   const auto* t = static_cast<const CrossTask*>(data);
   const auto& s = t->node->state_as<CrossState>();
-  const float* base = t->ctx->scratch;
+  float* base = t->ctx->scratch;
   t->node->ks->cross_scores(s.e, s.heads, t->node->in[1]->f32(), pos_of(*t->node), base + s.off_qt,
-                            t->ctx->scratch + s.off_s, size_t(s.kv_len), s.s_split.begin(task),
+                            base + s.off_s, size_t(s.kv_len), s.s_split.begin(task),
                             s.s_split.end(task));
 }
 
