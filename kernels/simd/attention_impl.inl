@@ -53,7 +53,7 @@ constexpr int kAttnChunk = 256;
 
 // Floats of per-thread scratch attn_block needs for head width dv vectors.
 static inline size_t attn_thread_scratch(int rows, int dv) {
-  return size_t(rows) * kAttnKB + size_t(kAttnChunk) * (size_t(dv) * kLanes + 2);
+  return size_t(rows) * kAttnKB + size_t(kAttnChunk) * (size_t(dv) * kLanes + 1 + kLanes);
 }
 
 // acc[r][t] = q_r . k_j for the S vectors of keys starting at kp (a column
@@ -114,10 +114,11 @@ static inline void attn_score(int d, const float* qh, size_t ldq, const float* k
 // The weights of R query rows against S vectors of keys at kp, against the
 // rows' current reference exponents m (mrow) instead of the block's maximum:
 // sbuf[r][j] = 2^(vc q_r . k_j - m_r), clamped to [2^-125, 2^126], straight
-// from the score registers. Padded keys (n and beyond) get weight 0.
-template <int R, int S>
+// from the score registers, and added into the rows' lane sums bsum. Padded
+// keys (n and beyond; only where !kFull) get weight 0.
+template <int R, int S, bool kFull>
 static inline void attn_score_exp(int d, const float* qh, size_t ldq, const float* kp, int n,
-                                  V vc, const float* mrow, float* sbuf) {
+                                  V vc, const float* mrow, float* sbuf, V* bsum) {
   V acc[R][S];
   attn_dots<R, S>(d, qh, ldq, kp, acc);
 #pragma GCC unroll 8
@@ -125,17 +126,34 @@ static inline void attn_score_exp(int d, const float* qh, size_t ldq, const floa
     const V neg_m = vset1(-mrow[r]);
 #pragma GCC unroll 4
     for (int t = 0; t < S; ++t) {
-      // Clamped even where vscale2 would saturate by itself (AVX-512): left
+      // Clamped below even where vscale2 would give 0 by itself (AVX-512):
       // unclamped, far-off keys give denormal weights, and the full 224 model
-      // measured ~25 % slower per frame that way. 2^126 fails the sum check.
-      const V x = vmin(vmax(vfmadd(acc[r][t], vc, neg_m), vset1(-125.0f)), vset1(126.0f));
-      vstore(sbuf + r * kAttnKB + t * kLanes, vexp2_bounded(x));
+      // measured ~25 % slower per frame that way. Above, 2^126 or +inf fails
+      // the sum check.
+      V x = vmax(vfmadd(acc[r][t], vc, neg_m), vset1(-125.0f));
+      if constexpr (!kExp2SaturatesHigh) x = vmin(x, vset1(126.0f));
+      const V e = vexp2_bounded(x);
+      vstore(sbuf + r * kAttnKB + t * kLanes, e);
+      if constexpr (kFull) bsum[r] = vadd(bsum[r], e);
     }
   }
-  if (n < S * kLanes) {
+  if constexpr (!kFull) {
     for (int r = 0; r < R; ++r) {
       for (int j = n; j < S * kLanes; ++j) sbuf[r * kAttnKB + j] = 0.0f;
+#pragma GCC unroll 4
+      for (int t = 0; t < S; ++t) bsum[r] = vadd(bsum[r], vload(sbuf + r * kAttnKB + t * kLanes));
     }
+  }
+}
+
+// Sub-block of SV vectors of keys at kp + js with kb - js keys left.
+template <int R, int SV>
+static inline void attn_score_exp_any(int d, const float* qh, size_t ldq, const float* kp, int left,
+                                      V vc, const float* ref, float* sbuf, V* bsum) {
+  if (left >= SV * kLanes) {
+    attn_score_exp<R, SV, true>(d, qh, ldq, kp, left, vc, ref, sbuf, bsum);
+  } else {
+    attn_score_exp<R, SV, false>(d, qh, ldq, kp, left, vc, ref, sbuf, bsum);
   }
 }
 
@@ -146,38 +164,37 @@ static inline void attn_score_exp(int d, const float* qh, size_t ldq, const floa
 // set. No maximum, no rescaling of sums and outputs, the exponentials taken
 // while the scores are still in registers. Exact up to rounding while no
 // weight overflows and the row's mass is not lost below the clamp: a row
-// whose block sum exceeds 2^64 (a score ~44 nats above the reference), or
-// whose first block sums below 2^-60 (all scores ~40 nats below 0), returns
-// false with mrow and lrow untouched, and the caller redoes the block with
-// its maximum.
+// one of whose lane sums exceeds 2^60 (a score ~40 nats above the
+// reference), or whose first block has no lane sum of 2^-60 (all scores ~40
+// nats below 0), returns false with mrow and lrow untouched, and the caller
+// redoes the block with its maximum. The row sums stay lane sums (lrow is
+// [R][kLanes]) until the chunk's end: no horizontal sum per block.
 template <int R, int SV>
 static inline bool attn_weights_lazy(bool first, int kb, int d, const float* qh, size_t ldq,
                                      const float* kp, V vc, float* sbuf, float* mrow,
                                      float* lrow) {
   float ref[R];
   for (int r = 0; r < R; ++r) ref[r] = first ? 0.0f : mrow[r];
+  V bsum[R];
+#pragma GCC unroll 8
+  for (int r = 0; r < R; ++r) bsum[r] = vzero();
   for (int js = 0; js < kb;) {
     if (SV > 1 && kb - js <= kLanes) {
-      attn_score_exp<R, 1>(d, qh, ldq, kp + js, kb - js, vc, ref, sbuf + js);
+      attn_score_exp_any<R, 1>(d, qh, ldq, kp + js, kb - js, vc, ref, sbuf + js, bsum);
       js += kLanes;
     } else {
-      attn_score_exp<R, SV>(d, qh, ldq, kp + js, kb - js, vc, ref, sbuf + js);
+      attn_score_exp_any<R, SV>(d, qh, ldq, kp + js, kb - js, vc, ref, sbuf + js, bsum);
       js += SV * kLanes;
     }
   }
-  const int kb_vec = (kb + kLanes - 1) / kLanes * kLanes;
-  const float low = first ? 0x1p-60f : 0.0f;
-  float sums[R];
+  // The checks on the lane sums, no horizontal sum: every lane <= 2^60 keeps
+  // the block's sum <= 2^64, one lane >= 2^-60 keeps it >= 2^-60 (NaN fails).
   for (int r = 0; r < R; ++r) {
-    const float* srow = sbuf + r * kAttnKB;
-    V sum = vzero();
-    for (int j = 0; j < kb_vec; j += kLanes) sum = vadd(sum, vload(srow + j));
-    sums[r] = vreduce_add(sum);
-    if (!(sums[r] <= 0x1p64f && sums[r] >= low)) return false;  // also NaN
+    if (!vall_le(bsum[r], 0x1p60f) || (first && !vany_ge(bsum[r], 0x1p-60f))) return false;
   }
   for (int r = 0; r < R; ++r) {
     mrow[r] = ref[r];
-    lrow[r] += sums[r];
+    vstore(lrow + r * kLanes, vadd(vload(lrow + r * kLanes), bsum[r]));
   }
   return true;
 }
@@ -230,7 +247,8 @@ static inline void attn_pv(int kb, const float* vh, size_t ldv, const int* dcnt,
 }
 
 // One group of R query rows against one key block [j0, j0 + kb): scores,
-// online-softmax update, and P V accumulated into obuf (rows of DV vectors).
+// online-softmax update, and P V accumulated into obuf (rows of DV vectors);
+// lrow holds each row's lane sums.
 // The softmax runs in base 2: vc = scale * log2(e), so each weight is
 // 2^(vc s - m) with m the running maximum of vc s (kept in mrow); the raw
 // scores' maximum is taken in registers while they are stored, and scaling
@@ -272,7 +290,7 @@ static inline void attn_group(bool first, int kb, int d, const float* qh, size_t
     const int n = R - r0 < kLanes ? R - r0 : kLanes;
     vstore_n(diff + r0, vexp2_nonpos(vload_n(diff + r0, n)), n);  // alpha_r
   }
-  // Exponentiate; rescale the sums and (in registers, below) the outputs.
+  // Exponentiate; rescale the lane sums and (in registers, below) the outputs.
   for (int r = 0; r < R; ++r) {
     float* srow = sbuf + r * kAttnKB;
     const V neg_m = vset1(-mrow[r]);
@@ -282,7 +300,7 @@ static inline void attn_group(bool first, int kb, int d, const float* qh, size_t
       vstore(srow + j, e);
       sum = vadd(sum, e);
     }
-    lrow[r] = lrow[r] * diff[r] + vreduce_add(sum);
+    vstore(lrow + r * kLanes, vfmadd(vload(lrow + r * kLanes), vset1(diff[r]), sum));
   }
   attn_pv<R, DV>(kb, vh, ldv, dcnt, sbuf, diff, obuf);
 }
@@ -296,7 +314,7 @@ static void attn_chunk(int rows, int kv_len, int d, const float* q, size_t ldq, 
   float* sbuf = scratch;                          // [R][kAttnKB]
   float* obuf = scratch + R * kAttnKB;            // [rows][DV * kLanes]
   float* mrow = obuf + kAttnChunk * DV * kLanes;  // [rows]
-  float* lrow = mrow + kAttnChunk;                // [rows]
+  float* lrow = mrow + kAttnChunk;                // [rows][kLanes]: lane sums
   int dcnt[DV];
 #pragma GCC unroll 4
   for (int t = 0; t < DV; ++t) {
@@ -305,7 +323,7 @@ static void attn_chunk(int rows, int kv_len, int d, const float* q, size_t ldq, 
   }
   for (int r = 0; r < rows; ++r) {
     mrow[r] = -__builtin_inff();
-    lrow[r] = 0.0f;
+    vstore(lrow + r * kLanes, vzero());
     for (int t = 0; t < DV; ++t) vstore(obuf + (r * DV + t) * kLanes, vzero());
   }
   const float* qh = q + size_t(q0) * ldq + size_t(h) * d;
@@ -319,14 +337,14 @@ static void attn_chunk(int rows, int kv_len, int d, const float* q, size_t ldq, 
     int g = 0;
     for (; g + R <= rows; g += R) {
       attn_group<R, SV, DV>(j0 == 0, kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vc, c, dcnt,
-                            sbuf, obuf + g * DV * kLanes, mrow + g, lrow + g);
+                            sbuf, obuf + g * DV * kLanes, mrow + g, lrow + g * kLanes);
     }
     const int left = rows - g;
 #define APRT_ATTN_TAIL(RR)                                                                      \
   case RR:                                                                                      \
     if constexpr (R > RR) {                                                                     \
       attn_group<RR, SV, DV>(j0 == 0, kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vc, c, dcnt, sbuf, \
-                             obuf + g * DV * kLanes, mrow + g, lrow + g);                      \
+                             obuf + g * DV * kLanes, mrow + g, lrow + g * kLanes);             \
     }                                                                                           \
     break;
     switch (left) {
@@ -342,7 +360,7 @@ static void attn_chunk(int rows, int kv_len, int d, const float* q, size_t ldq, 
 #undef APRT_ATTN_TAIL
   }
   for (int r = 0; r < rows; ++r) {
-    const V inv = vset1(1.0f / lrow[r]);
+    const V inv = vset1(1.0f / vreduce_add(vload(lrow + r * kLanes)));
     float* orow = o + size_t(q0 + r) * ldo + size_t(h) * d;
     for (int t = 0; t < DV; ++t) {
       if (dcnt[t] == 0) continue;

@@ -69,6 +69,13 @@ static inline float vreduce_max(V v) {
   s = _mm_max_ss(s, _mm_movehdup_ps(s));
   return _mm_cvtss_f32(s);
 }
+// Lane tests without a horizontal reduction (a NaN lane is never <= c).
+static inline bool vall_le(V a, float c) {
+  return _mm256_movemask_ps(_mm256_cmp_ps(a, vset1(c), _CMP_LE_OQ)) == 0xFF;
+}
+static inline bool vany_ge(V a, float c) {
+  return _mm256_movemask_ps(_mm256_cmp_ps(a, vset1(c), _CMP_GE_OQ)) != 0;
+}
 static inline V vfloor(V v) {
   return _mm256_round_ps(v, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
 }

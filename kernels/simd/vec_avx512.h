@@ -66,6 +66,13 @@ static inline float vreduce_add(V v) {
 static inline float vreduce_max(V v) {
   return _mm512_reduce_max_ps(v);
 }
+// Lane tests without a horizontal reduction (a NaN lane is never <= c).
+static inline bool vall_le(V a, float c) {
+  return _mm512_cmp_ps_mask(a, vset1(c), _CMP_LE_OQ) == 0xFFFF;
+}
+static inline bool vany_ge(V a, float c) {
+  return _mm512_cmp_ps_mask(a, vset1(c), _CMP_GE_OQ) != 0;
+}
 static inline V vfloor(V v) {
   return _mm512_roundscale_ps(v, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
 }
@@ -77,9 +84,16 @@ static inline V vload_u8(const uint8_t* p) {
 static inline V vround(V v) {
   return _mm512_roundscale_ps(v, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
 }
-// p * 2^n for integral n (vscalefps: one instruction, exact).
+// p * 2^floor(n) (vscalefps: one instruction, exact; n integral elsewhere).
 static inline V vscale2(V p, V n) {
   return _mm512_scalef_ps(p, n);
+}
+// x - floor(x), exactly, in [0, 1): vreduceps (AVX512DQ). With vscale2,
+// which floors its exponent operand itself, 2^x is p(x - floor x) * 2^x
+// without a separate rounding and subtraction (vexp2_bounded).
+#define APRT_VEC_HAS_FRAC_FLOOR 1
+static inline V vfrac_floor(V x) {
+  return _mm512_reduce_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
 }
 // 2^n for integral n in [-126, 127].
 static inline V vpow2i(V n) {

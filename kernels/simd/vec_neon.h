@@ -72,6 +72,13 @@ static inline float vreduce_add(V v) {
 static inline float vreduce_max(V v) {
   return vmaxvq_f32(v);
 }
+// Lane tests without a horizontal sum (a NaN lane is never <= c).
+static inline bool vall_le(V a, float c) {
+  return vminvq_u32(vcleq_f32(a, vdupq_n_f32(c))) != 0;
+}
+static inline bool vany_ge(V a, float c) {
+  return vmaxvq_u32(vcgeq_f32(a, vdupq_n_f32(c))) != 0;
+}
 static inline V vfloor(V v) {
   return vrndmq_f32(v);
 }
