@@ -113,8 +113,9 @@ static inline void attn_score(int d, const float* qh, size_t ldq, const float* k
 
 // The weights of R query rows against S vectors of keys at kp, against the
 // rows' current reference exponents m (mrow) instead of the block's maximum:
-// sbuf[r][j] = 2^(vc q_r . k_j - m_r), clamped to [2^-125, 2^126], straight
-// from the score registers, and added into the rows' lane sums bsum. Padded
+// sbuf[r][j] = 2^(vc q_r . k_j - m_r), at least 2^-125 (and at most 2^126
+// where the exponential does not saturate to +inf), straight from the score
+// registers, and added into the rows' lane sums bsum. Padded
 // keys (n and beyond; only where !kFull) get weight 0.
 template <int R, int S, bool kFull>
 static inline void attn_score_exp(int d, const float* qh, size_t ldq, const float* kp, int n,
@@ -146,7 +147,8 @@ static inline void attn_score_exp(int d, const float* qh, size_t ldq, const floa
   }
 }
 
-// Sub-block of SV vectors of keys at kp + js with kb - js keys left.
+// One sub-block of SV vectors of keys at kp with `left` keys of the block
+// left: the padded variant only where the sub-block runs past them.
 template <int R, int SV>
 static inline void attn_score_exp_any(int d, const float* qh, size_t ldq, const float* kp, int left,
                                       V vc, const float* ref, float* sbuf, V* bsum) {
@@ -189,6 +191,7 @@ static inline bool attn_weights_lazy(bool first, int kb, int d, const float* qh,
   }
   // The checks on the lane sums, no horizontal sum: every lane <= 2^60 keeps
   // the block's sum <= 2^64, one lane >= 2^-60 keeps it >= 2^-60 (NaN fails).
+  static_assert(kLanes <= 16, "kLanes lanes of at most 2^60 must sum to at most 2^64");
   for (int r = 0; r < R; ++r) {
     if (!vall_le(bsum[r], 0x1p60f) || (first && !vany_ge(bsum[r], 0x1p-60f))) return false;
   }

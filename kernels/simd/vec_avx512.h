@@ -89,8 +89,8 @@ static inline V vscale2(V p, V n) {
   return _mm512_scalef_ps(p, n);
 }
 // x - floor(x), exactly, in [0, 1): vreduceps (AVX512DQ). With vscale2,
-// which floors its exponent operand itself, 2^x is p(x - floor x) * 2^x
-// without a separate rounding and subtraction (vexp2_bounded).
+// which floors its exponent operand itself, 2^x is p(x - floor x) *
+// 2^floor(x) without a separate rounding and subtraction (vexp2_bounded).
 #define APRT_VEC_HAS_FRAC_FLOOR 1
 static inline V vfrac_floor(V x) {
   return _mm512_reduce_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
