@@ -4,11 +4,12 @@ The paper's loss (Kendall et al.'s learned weighting): L = L_p exp(-s_x) + s_x
 + L_q exp(-s_q) + s_q, with L1 position error on min-max normalised positions
 and a sign-invariant L1 quaternion error (q and -q are one rotation); Adam.
 Colour augmentation (brightness, contrast, per-channel gain, gamma, haze,
-noise) stands in for the lighting the training sequence does not show. A
-contiguous tenth of the route is held out for the validation error that the
-model file records; the test sequence is never looked at here.
+noise) stands in for the lighting the training sequences do not show. The
+validation error that the model file records comes from a separate drive
+(`val`) or, without one, from a contiguous tenth of the route held out; the
+test sequence is never looked at here.
 
-  python3 -m aprt_tools train --data DIR --out DIR [--size 128] [--minutes 90] ...
+  python3 -m aprt_tools train --data DIR [DIR ...] [--val DIR] --out DIR [--size 128] ...
 """
 
 from __future__ import annotations
@@ -166,11 +167,34 @@ def evaluate(model, imgs, pos, quat, lo, hi, batch=32, mean=None, std=None):
     return np.array(pe), np.array(oe)
 
 
-def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: int = 16,
+def _load(folders, modality, size, cfg, log, inputs, inputs_every):
+    """The frames, positions and quaternions of one or more sequences, concatenated."""
+    parts = []
+    for folder in folders:
+        if modality == "bev":
+            parts.append(load_lidar_sequence(folder, size, cfg.bev))
+        elif modality == "points":
+            parts.append(load_points_sequence(folder, cfg.points, log, inputs, inputs_every))
+        else:
+            parts.append(load_sequence(folder, size))
+    if len(parts) == 1:
+        return parts[0]
+    return tuple(torch.cat([p[k] for p in parts]) for k in range(3))
+
+
+def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 16,
           lr: float = 1e-4, seed: int = 1, threads: int = 2, hidden: int = 128, layers: int = 3,
           warmup_steps: int = 200, modality: str = "image", config: AprConfig | None = None,
-          inputs: str | None = None, inputs_every: int = 1, log=print):
-    """modality "image": DATA's poses.txt + images at size x size; "bev": its
+          inputs: str | None = None, inputs_every: int = 1, val: str | None = None,
+          augment_from: float = 0.3, log=print):
+    """data: one sequence folder or a list of them (several drives, e.g. under
+    different light), trained on together. val: a separate drive whose errors
+    are reported each epoch and recorded as the model's `val_error`; without
+    it a contiguous tenth of the (first) route is held out instead.
+    augment_from: the fraction of the budget before colour augmentation starts
+    ramping in (it reaches full strength 0.4 later).
+
+    modality "image": DATA's poses.txt + images at size x size; "bev": its
     lidar_poses.txt + scans as size x size BEV histograms over 32 m (the 'bev'
     configuration's geometry at that grid); "points": the same scans as
     `size` farthest-point samples through PointNet++ (the 'points'
@@ -192,17 +216,24 @@ def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: in
         hidden, layers = cfg.hidden_dim, cfg.enc_layers
     else:
         cfg = AprConfig.named({"bev": "bev", "points": "points"}.get(modality, "full"), size)
-    if modality == "bev":
-        imgs, pos, quat = load_lidar_sequence(data, size, cfg.bev)
-    elif modality == "points":
+    folders = [data] if isinstance(data, str) else list(data)
+    if not folders:
+        raise ValueError("no training sequence given")
+    if modality == "points":
         from .model.pointnet2 import check_points_config
 
         check_points_config(cfg.points)
-        imgs, pos, quat = load_points_sequence(data, cfg.points, log, inputs, inputs_every)
+        if inputs and len(folders) > 1:
+            raise ValueError("--inputs holds one sequence's inputs; give one --data with it")
+    imgs, pos, quat = _load(folders, modality, size, cfg, log, inputs, inputs_every)
+    log(f"train: {len(imgs)} frames from {', '.join(folders)} loaded in {time.time() - t0:.0f} s")
+    if val:
+        v_imgs, v_pos, v_quat = _load([val], modality, size, cfg, log, None, 1)
+        tr = np.arange(len(imgs))
+        log(f"train: validation drive {val}: {len(v_imgs)} frames")
     else:
-        imgs, pos, quat = load_sequence(data, size)
-    log(f"train: {len(imgs)} frames from {data} loaded in {time.time() - t0:.0f} s")
-    tr, va = split_holdout(len(imgs))
+        tr, va = split_holdout(len(imgs))
+        v_imgs, v_pos, v_quat = imgs[va], pos[va], quat[va]
     lo = pos[tr].min(dim=0).values
     hi = pos[tr].max(dim=0).values
     hi = torch.maximum(hi, lo + 1.0)  # a flat axis (camera height) still gets a unit range
@@ -240,7 +271,8 @@ def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: in
             # before it can learn invariance to lighting), augmentation ramped
             # in from 30 % to 70 % of the budget. With full augmentation from the
             # start the position stayed at the mean for 10+ CPU-minutes.
-            strength = min(1.0, max(0.0, (frac - 0.3) / 0.4)) if modality == "image" else 0.0
+            strength = (min(1.0, max(0.0, (frac - augment_from) / 0.4))
+                        if modality == "image" else 0.0)
             if cfg.points:
                 x = imgs[idx]
             else:
@@ -255,7 +287,7 @@ def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: in
                 log(f"train: epoch {epoch} step {step} loss {loss.item():.3f} pos {lp.item():.4f} "
                     f"quat {lq.item():.4f} s_x {loss_fn.s_x.item():.2f} s_q {loss_fn.s_q.item():.2f} "
                     f"{(time.time() - start) / 60:.1f} min")
-        pe, oe = evaluate(model, imgs[va], pos[va], quat[va], lo, hi, mean=cfg.mean, std=cfg.std)
+        pe, oe = evaluate(model, v_imgs, v_pos, v_quat, lo, hi, mean=cfg.mean, std=cfg.std)
         row = dict(epoch=epoch, step=step, minutes=(time.time() - start) / 60,
                    val_pos_median=float(np.median(pe)), val_rot_median=float(np.median(oe)))
         log_rows.append(row)
@@ -267,18 +299,20 @@ def train(data: str, out: str, size: int = 128, minutes: float = 90.0, batch: in
         # Written every epoch: an interrupted run is still exportable
         # (python3 -m aprt_tools export --config-json OUT/model.json --weights
         # OUT/checkpoint.pth -o OUT/model.onnx, then convert).
-        _write_config(out, cfg, log_rows, start, tr, epoch, step, data)
-    _write_config(out, cfg, log_rows, start, tr, epoch, step, data)
+        _write_config(out, cfg, log_rows, start, tr, epoch, step, folders, val)
+    _write_config(out, cfg, log_rows, start, tr, epoch, step, folders, val)
     cfg.dropout = 0.0
     return model, cfg
 
 
-def _write_config(out, cfg, log_rows, start, tr, epoch, step, data):
+def _write_config(out, cfg, log_rows, start, tr, epoch, step, folders, val):
     final = AprConfig.from_json(cfg.to_json())
     final.dropout = 0.0
     final.extra = dict(val_error=[log_rows[-1]["val_pos_median"], log_rows[-1]["val_rot_median"]],
                        train_minutes=(time.time() - start) / 60, train_frames=int(len(tr)),
-                       epochs=epoch, steps=step, data=os.path.basename(os.path.abspath(data)))
+                       epochs=epoch, steps=step,
+                       data=",".join(os.path.basename(os.path.abspath(f)) for f in folders),
+                       validation=os.path.basename(os.path.abspath(val)) if val else "holdout")
     with open(os.path.join(out, "model.json"), "w") as f:
         f.write(final.to_json())
     with open(os.path.join(out, "train_log.json"), "w") as f:

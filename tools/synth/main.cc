@@ -2,7 +2,10 @@
 //
 //   aprt_synth --out DIR [--split train|test] [--town-seed N] [--route-seed N]
 //              [--frames N] [--width 256 --height 192 --hfov 90]
-//              [--lighting day|dusk|overcast] [--lidar] [--beams 32] [--threads N]
+//              [--lighting day|overcast|morning|noon|haze|dusk] [--lane-jitter M]
+//              [--camera-mount X,Y,Z,PITCH_DEG] [--threads N]
+//              [--lidar] [--beams 32] [--azimuths 1024] [--lidar-range 80]
+//              [--lidar-noise 0.02] [--lidar-mount X,Y,Z]
 //
 // Writes the DeepLoc layout: DIR/poses.txt ("name x y z qw qx qy qz", the
 // camera's pose in the map frame), DIR/images/NNNNNN.png, with --lidar
@@ -18,12 +21,16 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <initializer_list>
+#include <optional>
 #include <random>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "tools/synth/drive.h"
+#include "tools/synth/lighting.h"
 #include "tools/synth/raycast.h"
 #include "tools/synth/town.h"
 
@@ -43,10 +50,12 @@ struct Options {
   double hfov_deg = 90.0;
   double spacing = 1.0;
   double max_length = 1e9;
+  double lane_jitter = -1;  // < 0: the split's default
   bool lidar = false;
   int beams = 32;
   int azimuths = 1024;
   double lidar_range = 80.0;
+  double lidar_noise = 0.02;  // range noise, standard deviation in metres
   int threads = 2;
   // Mounting on base_link (x forward, y left, z up), metres and degrees.
   double cam_x = 1.2, cam_y = 0.0, cam_z = 1.55, cam_pitch_deg = 3.0;
@@ -72,34 +81,6 @@ Vec3 rotate(Quat q, Vec3 v) {
   const double r20 = 2 * (x * z - w * y), r21 = 2 * (y * z + w * x), r22 = 1 - 2 * (x * x + y * y);
   return {r00 * v.x + r01 * v.y + r02 * v.z, r10 * v.x + r11 * v.y + r12 * v.z,
           r20 * v.x + r21 * v.y + r22 * v.z};
-}
-
-Lighting lighting_preset(const std::string& name) {
-  Lighting L;
-  auto sun_from = [](double az_deg, double el_deg) {
-    const double az = az_deg * kPi / 180, el = el_deg * kPi / 180;
-    return Vec3{std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
-  };
-  if (name == "dusk") {
-    L.sun_dir = sun_from(250, 14);
-    L.sun = {1.0f, 0.62f, 0.35f};
-    L.ambient = {0.22f, 0.2f, 0.28f};
-    L.sky_horizon = {0.95f, 0.6f, 0.4f};
-    L.sky_zenith = {0.25f, 0.3f, 0.55f};
-    L.fog = {0.7f, 0.55f, 0.5f};
-    L.fog_distance = 220.0;
-  } else if (name == "overcast") {
-    L.sun_dir = sun_from(200, 60);
-    L.sun = {0.25f, 0.25f, 0.27f};
-    L.ambient = {0.62f, 0.63f, 0.66f};
-    L.sky_horizon = {0.78f, 0.79f, 0.8f};
-    L.sky_zenith = {0.6f, 0.62f, 0.66f};
-    L.fog = {0.72f, 0.73f, 0.75f};
-    L.fog_distance = 140.0;
-  } else {
-    L.sun_dir = sun_from(135, 50);
-  }
-  return L;
 }
 
 bool write_png(const std::string& path, int w, int h, const std::vector<uint8_t>& rgb) {
@@ -150,7 +131,7 @@ void render_image(const Scene& scene, const Options& o, const Lighting& L, Vec3 
 bool write_scan(const Scene& scene, const Options& o, Vec3 origin, double yaw, uint32_t seed,
                 const std::string& path) {
   std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, 0.02);
+  std::normal_distribution<double> noise(0.0, o.lidar_noise);
   std::vector<float> pts;
   pts.reserve(size_t(o.beams) * o.azimuths * 4);
   const Quat q = yaw_pitch(yaw, 0.0);
@@ -187,8 +168,11 @@ int usage() {
                "usage: aprt_synth --out DIR [--split train|test] [--town-seed N] [--route-seed N]\n"
                "                  [--frames N] [--max-length M] [--spacing M] [--width W] "
                "[--height H] [--hfov DEG]\n"
-               "                  [--lighting day|dusk|overcast] [--lidar] [--beams N] "
-               "[--threads N]\n");
+               "                  [--lighting %s] [--lane-jitter M] [--threads N]\n"
+               "                  [--camera-mount X,Y,Z,PITCH_DEG] [--lidar] [--beams N] "
+               "[--azimuths N]\n"
+               "                  [--lidar-range M] [--lidar-noise M] [--lidar-mount X,Y,Z]\n",
+               kLightingNames);
   return 2;
 }
 
@@ -203,6 +187,42 @@ int run(int argc, char** argv) {
       continue;
     }
     if (!(v = next())) return usage();
+    // Numbers must parse whole: "--frames 1O" is refused, never read as 1.
+    bool number_ok = true;
+    std::string expected = "a valid number";
+    auto real = [&](double* out) {
+      char* end = nullptr;
+      errno = 0;
+      const double d = std::strtod(v, &end);
+      number_ok = end != v && *end == '\0' && errno == 0 && std::isfinite(d);
+      if (number_ok) *out = d;
+    };
+    // "a,b,c": exactly `count` numbers.
+    auto reals = [&](std::initializer_list<double*> outs) {
+      expected = std::to_string(outs.size()) + " comma-separated numbers";
+      const char* p = v;
+      for (double* out : outs) {
+        char* end = nullptr;
+        errno = 0;
+        const double d = std::strtod(p, &end);
+        number_ok = number_ok && end != p && errno == 0 && std::isfinite(d);
+        if (!number_ok) return;
+        *out = d;
+        p = end;
+        if (out != *(outs.end() - 1)) {
+          number_ok = *p == ',';
+          if (!number_ok) return;
+          ++p;
+        }
+      }
+      number_ok = *p == '\0';
+    };
+    auto integer = [&](auto* out) {
+      double d = 0;
+      real(&d);
+      number_ok = number_ok && d == std::floor(d) && d >= 0 && d <= 4294967295.0;
+      if (number_ok) *out = static_cast<std::remove_pointer_t<decltype(out)>>(d);
+    };
     if (a == "--out")
       o.out = v;
     else if (a == "--split")
@@ -210,29 +230,68 @@ int run(int argc, char** argv) {
     else if (a == "--lighting")
       o.lighting = v;
     else if (a == "--town-seed")
-      o.town_seed = uint32_t(std::atoi(v));
+      integer(&o.town_seed);
     else if (a == "--route-seed")
-      o.route_seed = uint32_t(std::atoi(v));
+      integer(&o.route_seed);
     else if (a == "--frames")
-      o.frames = std::atoi(v);
+      integer(&o.frames);
     else if (a == "--max-length")
-      o.max_length = std::atof(v);
+      real(&o.max_length);
     else if (a == "--spacing")
-      o.spacing = std::atof(v);
+      real(&o.spacing);
+    else if (a == "--lane-jitter")
+      real(&o.lane_jitter);
     else if (a == "--width")
-      o.width = std::atoi(v);
+      integer(&o.width);
     else if (a == "--height")
-      o.height = std::atoi(v);
+      integer(&o.height);
     else if (a == "--hfov")
-      o.hfov_deg = std::atof(v);
+      real(&o.hfov_deg);
     else if (a == "--beams")
-      o.beams = std::atoi(v);
+      integer(&o.beams);
+    else if (a == "--azimuths")
+      integer(&o.azimuths);
+    else if (a == "--lidar-range")
+      real(&o.lidar_range);
+    else if (a == "--lidar-noise")
+      real(&o.lidar_noise);
+    else if (a == "--camera-mount")
+      reals({&o.cam_x, &o.cam_y, &o.cam_z, &o.cam_pitch_deg});
+    else if (a == "--lidar-mount")
+      reals({&o.lidar_x, &o.lidar_y, &o.lidar_z});
     else if (a == "--threads")
-      o.threads = std::max(1, std::atoi(v));
+      integer(&o.threads);
     else
       return usage();
+    if (!number_ok) {
+      std::fprintf(stderr, "aprt_synth: %s '%s' is not %s\n", a.c_str(), v, expected.c_str());
+      return 2;
+    }
   }
-  if (o.out.empty() || o.width < 8 || o.height < 8 || o.spacing <= 0) return usage();
+  o.threads = std::max(1, o.threads);
+  if (o.out.empty() || o.width < 8 || o.height < 8 || o.spacing <= 0 || o.hfov_deg <= 0 ||
+      o.hfov_deg >= 180 || o.beams < 1 || o.azimuths < 1 || o.lidar_range <= 1.0 ||
+      o.lidar_noise < 0 || std::fabs(o.cam_pitch_deg) >= 90) {
+    return usage();
+  }
+  const std::optional<Lighting> lighting = lighting_preset(o.lighting);
+  if (!lighting) {
+    std::fprintf(stderr, "aprt_synth: unknown lighting '%s' (one of %s)\n", o.lighting.c_str(),
+                 kLightingNames);
+    return 2;
+  }
+  if (o.split != "train" && o.split != "test") {
+    std::fprintf(stderr,
+                 "aprt_synth: unknown split '%s' (train: every street both ways; test: "
+                 "a random drive)\n",
+                 o.split.c_str());
+    return 2;
+  }
+  if (o.lane_jitter > 2.0) {
+    std::fprintf(stderr, "aprt_synth: --lane-jitter %.2f m would leave the 2.5 m lane\n",
+                 o.lane_jitter);
+    return 2;
+  }
   const Town town = make_town(o.town_seed);
   const Scene scene(town);
   RouteOptions ro;
@@ -240,7 +299,7 @@ int run(int argc, char** argv) {
   ro.cover_all = o.split == "train";
   ro.max_length = o.max_length;
   ro.spacing = o.spacing;
-  ro.lane_jitter = o.split == "train" ? 0.5 : 0.7;
+  ro.lane_jitter = o.lane_jitter >= 0 ? o.lane_jitter : (o.split == "train" ? 0.5 : 0.7);
   std::vector<VehiclePose> path = drive(town, ro);
   if (o.frames > 0 && size_t(o.frames) < path.size()) path.resize(size_t(o.frames));
   for (const std::string& dir : {o.out, o.out + "/images", o.out + "/lidar"}) {
@@ -250,7 +309,7 @@ int run(int argc, char** argv) {
       return 1;
     }
   }
-  const Lighting L = lighting_preset(o.lighting);
+  const Lighting L = *lighting;
   const double pitch = o.cam_pitch_deg * kPi / 180;
   std::vector<std::string> lines(path.size()), lidar_lines(path.size());
   std::vector<int> failed(size_t(o.threads), 0);
@@ -318,11 +377,12 @@ int run(int argc, char** argv) {
       "\"cx\": %.2f, \"cy\": %.2f, \"hfov_deg\": %.2f},\n"
       " \"camera_to_base_link\": {\"xyz\": [%.3f, %.3f, %.3f], \"rpy_deg\": [0, %.3f, 0]},\n"
       " \"lidar_to_base_link\": {\"xyz\": [%.3f, %.3f, %.3f], \"rpy_deg\": [0, 0, 0]},\n"
-      " \"town_extent_m\": %.1f, \"lidar\": %s, \"beams\": %d}\n",
+      " \"town_extent_m\": %.1f, \"lane_jitter_m\": %.2f, \"lidar\": %s, \"beams\": %d,\n"
+      " \"azimuths\": %d, \"lidar_range_m\": %.1f, \"lidar_noise_m\": %.3f}\n",
       o.split.c_str(), o.lighting.c_str(), o.town_seed, o.route_seed, path.size(), o.width,
       o.height, f, f, o.width / 2.0 - 0.5, o.height / 2.0 - 0.5, o.hfov_deg, o.cam_x, o.cam_y,
-      o.cam_z, o.cam_pitch_deg, o.lidar_x, o.lidar_y, o.lidar_z, town.extent,
-      o.lidar ? "true" : "false", o.beams);
+      o.cam_z, o.cam_pitch_deg, o.lidar_x, o.lidar_y, o.lidar_z, town.extent, ro.lane_jitter,
+      o.lidar ? "true" : "false", o.beams, o.azimuths, o.lidar_range, o.lidar_noise);
   std::fclose(j);
   std::printf("aprt_synth: %zu frames (%s, %s) -> %s\n", path.size(), o.split.c_str(),
               o.lighting.c_str(), o.out.c_str());

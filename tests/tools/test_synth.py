@@ -1,0 +1,143 @@
+"""aprt_synth (tools/synth): deterministic drives, the lighting presets, refusals;
+and the trainer on several drives with a separate validation drive.
+
+APRT_SYNTH names the binary (the ctest entry sets it)."""
+
+import json
+import os
+import subprocess
+import tempfile
+import unittest
+
+import numpy as np
+
+from aprt_tools.dataset import load_image, read_poses
+
+SYNTH = os.environ.get("APRT_SYNTH", "")
+LIGHTINGS = ("day", "overcast", "morning", "noon", "haze", "dusk")
+
+
+def read(path):
+    with open(path) as f:
+        return f.read()
+
+
+def synth(out, *args, check=True):
+    r = subprocess.run([SYNTH, "--out", out, "--width", "48", "--height", "32", *args],
+                       capture_output=True, text=True)
+    if check and r.returncode != 0:
+        raise AssertionError(f"aprt_synth {' '.join(args)} failed: {r.stderr}")
+    return r
+
+
+@unittest.skipUnless(os.access(SYNTH, os.X_OK), "APRT_SYNTH does not name the aprt_synth binary")
+class Synth(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.addCleanup(self.dir.cleanup)
+
+    def path(self, name):
+        return os.path.join(self.dir.name, name)
+
+    def test_same_arguments_give_the_same_drive(self):
+        for name in ("a", "b"):
+            synth(self.path(name), "--split", "test", "--route-seed", "5", "--frames", "6",
+                  "--lighting", "morning", "--threads", "1" if name == "a" else "2")
+        self.assertEqual(read(self.path("a/poses.txt")), read(self.path("b/poses.txt")))
+        for name, _, _ in read_poses(self.path("a")):
+            np.testing.assert_array_equal(load_image(self.path("a"), name),
+                                          load_image(self.path("b"), name))
+
+    def test_every_lighting_renders_the_same_places_differently(self):
+        images = {}
+        for light in LIGHTINGS:
+            synth(self.path(light), "--split", "test", "--frames", "3", "--lighting", light)
+            meta = json.loads(read(self.path(f"{light}/dataset.json")))
+            self.assertEqual(meta["lighting"], light)
+            images[light] = load_image(self.path(light), "images/000002.png").astype(float)
+        poses = {light: read(self.path(f"{light}/poses.txt")) for light in LIGHTINGS}
+        self.assertEqual(len(set(poses.values())), 1, "lighting must not move the route")
+        for i, a in enumerate(LIGHTINGS):
+            for b in LIGHTINGS[i + 1:]:
+                self.assertGreater(np.abs(images[a] - images[b]).mean(), 3.0, f"{a} vs {b}")
+
+    def test_training_routes_cover_every_street_both_ways(self):
+        synth(self.path("t"), "--split", "train", "--route-seed", "3", "--spacing", "5",
+              "--lane-jitter", "0.8")
+        meta = json.loads(read(self.path("t/dataset.json")))
+        self.assertAlmostEqual(meta["lane_jitter_m"], 0.8)
+        poses = read_poses(self.path("t"))
+        xy = np.stack([p[:2] for _, p, _ in poses])
+        heading = np.array([2 * np.arctan2(q[3], q[0]) for _, _, q in poses])
+        # Every street segment's midpoint is passed in both directions.
+        n, block = 5, 50.0
+        for i in range(n):
+            for j in range(n - 1):
+                for mid, along in (((i * block, (j + 0.5) * block), np.pi / 2),
+                                   (((j + 0.5) * block, i * block), 0.0)):
+                    near = np.hypot(xy[:, 0] - mid[0], xy[:, 1] - mid[1]) < 6.0
+                    dirs = np.cos(heading[near] - along)
+                    self.assertTrue((dirs > 0.9).any() and (dirs < -0.9).any(),
+                                    f"street through {mid} not driven both ways")
+
+    def test_mounting_and_lidar_options(self):
+        synth(self.path("m"), "--frames", "2", "--camera-mount", "1.0,0.2,2.0,5", "--lidar",
+              "--beams", "4", "--azimuths", "90", "--lidar-range", "40", "--lidar-noise", "0",
+              "--lidar-mount", "0,0,2.5")
+        meta = json.loads(read(self.path("m/dataset.json")))
+        self.assertEqual(meta["camera_to_base_link"], {"xyz": [1.0, 0.2, 2.0], "rpy_deg": [0, 5, 0]})
+        self.assertEqual(meta["lidar_to_base_link"]["xyz"], [0.0, 0.0, 2.5])
+        self.assertEqual((meta["beams"], meta["azimuths"], meta["lidar_range_m"]), (4, 90, 40.0))
+        cam = read_poses(self.path("m"))[0][1]
+        lidar = read_poses(self.path("m"), "lidar_poses.txt")[0][1]
+        self.assertAlmostEqual(cam[2], 2.0, places=3)
+        self.assertAlmostEqual(lidar[2], 2.5, places=3)
+        pts = np.fromfile(self.path("m/lidar/000000.bin"), np.float32).reshape(-1, 4)
+        self.assertGreater(len(pts), 0)
+        self.assertLessEqual(len(pts), 4 * 90)
+        self.assertLessEqual(np.linalg.norm(pts[:, :3], axis=1).max(), 40.0 + 1e-3)
+
+    def test_bad_arguments_are_refused(self):
+        for args, message in ((["--lighting", "sunset"], "unknown lighting 'sunset'"),
+                              (["--frames", "1O"], "--frames '1O' is not a valid number"),
+                              (["--split", "val"], "unknown split 'val'"),
+                              (["--lane-jitter", "3"], "would leave the 2.5 m lane"),
+                              (["--camera-mount", "1,0,2"],
+                               "--camera-mount '1,0,2' is not 4 comma-separated numbers")):
+            r = synth(self.path("bad"), *args, check=False)
+            self.assertEqual(r.returncode, 2, args)
+            self.assertIn(message, r.stderr)
+
+
+@unittest.skipUnless(os.access(SYNTH, os.X_OK), "APRT_SYNTH does not name the aprt_synth binary")
+class TrainOnDrives(unittest.TestCase):
+    """train(): several drives together, errors on a separate validation drive."""
+
+    def test_two_drives_and_a_validation_drive(self):
+        from aprt_tools.train import train
+
+        with tempfile.TemporaryDirectory() as d:
+            for name, light, seed in (("day", "day", "1"), ("noon", "noon", "2"),
+                                      ("val", "haze", "3")):
+                synth(os.path.join(d, name), "--split", "test", "--route-seed", seed,
+                      "--frames", "12", "--lighting", light)
+            logs = []
+            train([os.path.join(d, "day"), os.path.join(d, "noon")], os.path.join(d, "run"),
+                  size=32, minutes=0.02, batch=4, hidden=32, layers=1, val=os.path.join(d, "val"),
+                  log=logs.append)
+            self.assertTrue(any("24 frames" in line for line in logs), logs)
+            self.assertTrue(any("validation drive" in line and "12 frames" in line
+                                for line in logs), logs)
+            cfg = json.loads(read(os.path.join(d, "run", "model.json")))
+            self.assertEqual(cfg["extra"]["data"], "day,noon")
+            self.assertEqual(cfg["extra"]["validation"], "val")
+            self.assertTrue(all(np.isfinite(cfg["extra"]["val_error"])))
+            with self.assertRaisesRegex(ValueError, "no training sequence"):
+                train([], os.path.join(d, "run2"), size=32, minutes=0.01)
+            with self.assertRaises(OSError):
+                train([os.path.join(d, "day")], os.path.join(d, "run3"), size=32, minutes=0.01,
+                      val=os.path.join(d, "missing"))
+
+
+if __name__ == "__main__":
+    unittest.main()

@@ -1,0 +1,19 @@
+// Named lighting conditions of the synthetic town. The training drives use
+// day, overcast, morning and noon; haze is kept for validation under a light
+// the model was not trained on; dusk is the test drive's and in no training
+// or validation set (docs/evaluation.md: the paper's split principle).
+#pragma once
+
+#include <optional>
+#include <string_view>
+
+#include "tools/synth/raycast.h"
+
+namespace aprt::synth {
+
+// The preset of that name, or nullopt for a name that is none of kLightingNames.
+std::optional<Lighting> lighting_preset(std::string_view name);
+
+inline constexpr const char* kLightingNames = "day|overcast|morning|noon|haze|dusk";
+
+}  // namespace aprt::synth
