@@ -114,6 +114,8 @@ class TrainOnDrives(unittest.TestCase):
     """train(): several drives together, errors on a separate validation drive."""
 
     def test_two_drives_and_a_validation_drive(self):
+        import torch
+
         from aprt_tools.train import train
 
         with tempfile.TemporaryDirectory() as d:
@@ -132,6 +134,20 @@ class TrainOnDrives(unittest.TestCase):
             self.assertEqual(cfg["extra"]["data"], "day,noon")
             self.assertEqual(cfg["extra"]["validation"], "val")
             self.assertTrue(all(np.isfinite(cfg["extra"]["val_error"])))
+            # A second phase from the checkpoint keeps the configuration and the bounds.
+            logs = []
+            train([os.path.join(d, "noon")], os.path.join(d, "phase2"), minutes=0.02, batch=4,
+                  val=os.path.join(d, "val"), init=os.path.join(d, "run", "checkpoint.pth"),
+                  log=logs.append)
+            self.assertTrue(any("continuing from" in line for line in logs), logs)
+            cfg2 = json.loads(read(os.path.join(d, "phase2", "model.json")))
+            for key in ("pose_min", "pose_max", "hidden_dim", "image_size", "enc_layers"):
+                self.assertEqual(cfg2[key], cfg[key], key)
+            with open(os.path.join(d, "junk.pth"), "wb") as f:
+                torch.save({"weights": 1}, f)
+            with self.assertRaisesRegex(ValueError, "not a checkpoint"):
+                train([os.path.join(d, "noon")], os.path.join(d, "phase3"), minutes=0.01,
+                      init=os.path.join(d, "junk.pth"))
             with self.assertRaisesRegex(ValueError, "no training sequence"):
                 train([], os.path.join(d, "run2"), size=32, minutes=0.01)
             with self.assertRaises(OSError):

@@ -138,6 +138,10 @@ def cmd_train(a):
     if a.size is None:
         a.size = 4096 if a.modality == "points" else 128
     preset = None
+    if a.config_json and a.init:
+        print("train: --config-json and --init both give the configuration: choose one",
+              file=sys.stderr)
+        sys.exit(2)
     if a.config_json:
         try:
             preset = AprConfig.from_json(open(a.config_json).read())
@@ -152,7 +156,8 @@ def cmd_train(a):
         model, cfg = train(a.data, a.out, size=a.size, minutes=a.minutes, batch=a.batch, lr=a.lr,
                            seed=a.seed, threads=a.threads, hidden=a.hidden, layers=a.layers,
                            modality=a.modality, config=preset, inputs=a.inputs,
-                           inputs_every=a.inputs_every, val=a.val, augment_from=a.augment_from)
+                           inputs_every=a.inputs_every, val=a.val, augment_from=a.augment_from,
+                           init=a.init)
     except (OSError, ValueError) as e:
         print(f"train: {e}", file=sys.stderr)
         sys.exit(2)
@@ -267,6 +272,8 @@ def main(argv=None):
                    help="folder(s) with poses.txt and the images; several drives train together")
     t.add_argument("--val", help="a separate drive for the validation error (default: a "
                                  "contiguous tenth of the first --data held out)")
+    t.add_argument("--init", help="a checkpoint.pth of an earlier run: continue from its weights "
+                                  "(its configuration and position bounds; new schedule)")
     t.add_argument("--augment-from", type=float, default=0.3,
                    help="fraction of the budget before colour augmentation ramps in (image)")
     t.add_argument("--out", required=True)

@@ -186,13 +186,17 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
           lr: float = 1e-4, seed: int = 1, threads: int = 2, hidden: int = 128, layers: int = 3,
           warmup_steps: int = 200, modality: str = "image", config: AprConfig | None = None,
           inputs: str | None = None, inputs_every: int = 1, val: str | None = None,
-          augment_from: float = 0.3, log=print):
+          augment_from: float = 0.3, init: str | None = None, log=print):
     """data: one sequence folder or a list of them (several drives, e.g. under
     different light), trained on together. val: a separate drive whose errors
     are reported each epoch and recorded as the model's `val_error`; without
     it a contiguous tenth of the (first) route is held out instead.
     augment_from: the fraction of the budget before colour augmentation starts
     ramping in (it reaches full strength 0.4 later).
+    init: a checkpoint.pth this trainer wrote; training continues from its
+    weights and learned loss weights, with its configuration and position
+    bounds (a second phase, or fine-tuning on new drives). The learning-rate
+    schedule and the augmentation curriculum start again over `minutes`.
 
     modality "image": DATA's poses.txt + images at size x size; "bev": its
     lidar_poses.txt + scans as size x size BEV histograms over 32 m (the 'bev'
@@ -209,6 +213,14 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     torch.set_num_threads(threads)
     os.makedirs(out, exist_ok=True)
     t0 = time.time()
+    checkpoint = None
+    if init is not None:
+        if config is not None:
+            raise ValueError("give either a configuration or a checkpoint to start from, not both")
+        checkpoint = torch.load(init, map_location="cpu")
+        if not isinstance(checkpoint, dict) or "model_state_dict" not in checkpoint:
+            raise ValueError(f"{init}: not a checkpoint written by aprt_tools train")
+        config = AprConfig.from_json(json.dumps(checkpoint["config"]))
     if config is not None:
         cfg = AprConfig.from_json(config.to_json())
         modality = "points" if cfg.points else "bev" if cfg.bev else "image"
@@ -234,9 +246,12 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     else:
         tr, va = split_holdout(len(imgs))
         v_imgs, v_pos, v_quat = imgs[va], pos[va], quat[va]
-    lo = pos[tr].min(dim=0).values
-    hi = pos[tr].max(dim=0).values
-    hi = torch.maximum(hi, lo + 1.0)  # a flat axis (camera height) still gets a unit range
+    if checkpoint is not None:  # the head regresses within the bounds it was trained with
+        lo, hi = torch.tensor(cfg.pose_min), torch.tensor(cfg.pose_max)
+    else:
+        lo = pos[tr].min(dim=0).values
+        hi = pos[tr].max(dim=0).values
+        hi = torch.maximum(hi, lo + 1.0)  # a flat axis (camera height) still gets a unit range
     if config is None:
         cfg.hidden_dim, cfg.dim_feedforward = hidden, 2 * hidden
         cfg.enc_layers = cfg.dec_layers = layers
@@ -244,6 +259,10 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     cfg.pose_min, cfg.pose_max = tuple(lo.tolist()), tuple(hi.tolist())
     model = AprTransformer(cfg)
     loss_fn = PoseLoss()
+    if checkpoint is not None:
+        model.load_state_dict(checkpoint["model_state_dict"])
+        loss_fn = PoseLoss(checkpoint.get("s_x", -3.0), checkpoint.get("s_q", -3.0))
+        log(f"train: continuing from {init}")
     opt = torch.optim.AdamW(list(model.parameters()) + list(loss_fn.parameters()), lr=lr,
                             weight_decay=1e-4)
     gen = torch.Generator().manual_seed(seed)
