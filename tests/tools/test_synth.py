@@ -148,6 +148,15 @@ class TrainOnDrives(unittest.TestCase):
             with self.assertRaisesRegex(ValueError, "not a checkpoint"):
                 train([os.path.join(d, "noon")], os.path.join(d, "phase3"), minutes=0.01,
                       init=os.path.join(d, "junk.pth"))
+            # Two data-parallel workers: the same files, the weights checked equal at the end.
+            train([os.path.join(d, "day")], os.path.join(d, "ddp"), size=32, minutes=0.05,
+                  batch=4, hidden=32, layers=1, val=os.path.join(d, "val"), workers=2)
+            rows = json.loads(read(os.path.join(d, "ddp", "train_log.json")))
+            self.assertGreater(rows[-1]["step"], 0)
+            self.assertTrue(os.path.exists(os.path.join(d, "ddp", "checkpoint.pth")))
+            self.assertFalse([n for n in os.listdir(os.path.join(d, "ddp")) if "workers" in n])
+            with self.assertRaisesRegex(ValueError, "does not split over 3 workers"):
+                train([os.path.join(d, "day")], os.path.join(d, "ddp3"), batch=4, workers=3)
             with self.assertRaisesRegex(ValueError, "no training sequence"):
                 train([], os.path.join(d, "run2"), size=32, minutes=0.01)
             with self.assertRaises(OSError):
