@@ -5,7 +5,8 @@
 // coefficients), about 2 ulp on [-87.3, 88]; inputs are clamped to that range
 // (below it the result is 1.2e-38 instead of a denormal or zero).
 // erf: Abramowitz & Stegun 7.1.26, absolute error <= 1.5e-7, which is below
-// GELU's float rounding at every magnitude that matters.
+// GELU's float rounding at every magnitude that matters; its exponential is
+// the base-2 one (vexp2_bounded).
 
 static inline V vexp(V x) {
   // Clamped so that 2^n stays a normal float: n in [-126, 127].
@@ -87,7 +88,12 @@ static inline V verf(V x) {
   p = vfmadd(p, t, vset1(-0.284496736f));
   p = vfmadd(p, t, vset1(0.254829592f));
   p = vmul(p, t);
-  const V y = vsub(vset1(1.0f), vmul(p, vexp(vsub(vzero(), vmul(a, a)))));
+  // e^(-a^2) as 2^(-a^2 log2 e), clamped at 2^-125 (erf is 1 to float
+  // precision long before, at a ~ 4): the base-2 exponential needs no
+  // Cody-Waite reduction, ~6 operations fewer per vector than vexp (GELU
+  // ends every transformer feed-forward's first product).
+  const V e2 = vmax(vmul(a, vmul(a, vset1(-1.44269504088896341f))), vset1(-125.0f));
+  const V y = vsub(vset1(1.0f), vmul(p, vexp2_bounded(e2)));
   return vcopysign(y, x);
 }
 
