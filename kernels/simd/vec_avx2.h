@@ -3,6 +3,7 @@
 
 using V = __m256;
 inline constexpr int kLanes = 8;
+inline constexpr int kVecRegisters = 16;  // architectural vector registers
 
 static inline V vzero() {
   return _mm256_setzero_ps();

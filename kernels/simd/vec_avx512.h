@@ -5,6 +5,7 @@
 
 using V = __m512;
 inline constexpr int kLanes = 16;
+inline constexpr int kVecRegisters = 32;  // architectural vector registers
 
 static inline V vzero() {
   return _mm512_setzero_ps();

@@ -4,6 +4,7 @@
 
 using V = float32x4_t;
 inline constexpr int kLanes = 4;
+inline constexpr int kVecRegisters = 32;  // architectural vector registers
 
 static inline V vzero() {
   return vdupq_n_f32(0.0f);
