@@ -249,6 +249,20 @@ BENCHMARK(BM_Attention)
     ->Args({256, 8, 32})
     ->Args({196, 8, 32})
     ->Args({64, 8, 32});
+// LAYERNORM over rows x width (the transformers' 784 / 196 tokens of 256).
+void BM_LayerNorm(benchmark::State& state) {
+  const int rows = int(state.range(0)), n = int(state.range(1));
+  const auto x = rnd(size_t(rows) * n), gamma = rnd(n), beta = rnd(n);
+  Buf y(x.size());
+  for (auto _ : state) {
+    g_ks->layernorm_rows(n, x.data(), gamma.data(), beta.data(), 1e-5f, y.data(), 0, rows);
+    benchmark::DoNotOptimize(y.data());
+  }
+  state.counters["Gelem/s"] =
+      benchmark::Counter(double(rows) * n / 1e9, benchmark::Counter::kIsIterationInvariantRate);
+  state.SetLabel(g_ks->isa);
+}
+BENCHMARK(BM_LayerNorm)->Args({784, 256})->Args({196, 256});
 void BM_Activation(benchmark::State& state) {
   const auto x = rnd(65536);
   Buf y(x.size());
