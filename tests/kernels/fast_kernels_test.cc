@@ -160,6 +160,29 @@ TEST_P(FastKernels, DenseConvolution) {
   }
 }
 
+// Widths of whole vector pairs on every ISA (multiples of 32) take the
+// four-rows-interleaved path for each full group of four rows of a range:
+// against the reference, and bit for bit against the one-row loop (a range
+// of one row), which it claims to match operation for operation.
+TEST_P(FastKernels, LayerNormFourRowsMatchOneRow) {
+  for (int round = 0; round < 20; ++round) {
+    const int rows = pick(4, 13), n = 32 * pick(1, 10);
+    auto x = rnd(size_t(rows) * n, 3.0f);
+    for (auto& v : x) v += 2.0f;
+    const auto g = rnd(n), b = rnd(n);
+    std::vector<float> want(x.size()), got(x.size()), one(x.size());
+    f32_layernorm__ref(rows, n, x.data(), g.data(), b.data(), 1e-5f, want.data());
+    const int r0 = pick(0, rows - 4);  // a range that starts anywhere
+    ks_->layernorm_rows(n, x.data(), g.data(), b.data(), 1e-5f, got.data(), 0, r0);
+    ks_->layernorm_rows(n, x.data(), g.data(), b.data(), 1e-5f, got.data(), r0, rows);
+    for (int r = 0; r < rows; ++r) {
+      ks_->layernorm_rows(n, x.data(), g.data(), b.data(), 1e-5f, one.data(), r, r + 1);
+    }
+    expect_near_all(got, want, 2e-5, "layernorm n=" + std::to_string(n));
+    EXPECT_EQ(got, one) << "n=" << n << " rows=" << rows << " r0=" << r0;
+  }
+}
+
 TEST_P(FastKernels, LayerNormAddActivation) {
   for (int round = 0; round < 30; ++round) {
     const int rows = pick(1, 9), n = pick(1, 300);
