@@ -169,7 +169,11 @@ Config shipped_config() {
   return c;
 #endif
   c.source.replay.rate_hz = 40;
-  c.source.replay.frames = 80;  // 2 s
+  // 2 s. Faults counted in inferences or poses come early in it: a sanitizer
+  // build's inference of the shipped model (~35 ms alone, twice that beside
+  // another test) is slower than the 25 ms replay, frames are skipped, and a
+  // fault at the 30th inference left no time to recover in.
+  c.source.replay.frames = 80;
   c.output.console = false;
   c.output.summary = false;
   c.sanity.max_jump_m = 0;  // only the injected faults flag poses
@@ -254,7 +258,7 @@ TEST(FaultInjection, NanOutputIsFlaggedWithheldAndRecovers) {
   c.output.dds.domain = int(test_domain());
   c.output.dds.pose_topic = "/aprt/fault_test/pose";
   c.output.dds.diagnostics_topic = "/aprt/fault_test/diagnostics";
-  c.fault_injection.push_back({FaultKind::kNanOutput, 30, 4, 0});
+  c.fault_injection.push_back({FaultKind::kNanOutput, 10, 4, 0});
   std::vector<std::string> t;
   RunStats st;
   OutputStats o;
@@ -265,13 +269,14 @@ TEST(FaultInjection, NanOutputIsFlaggedWithheldAndRecovers) {
   EXPECT_EQ(o.dds_errors, 0u);
   const int d = find_in(t, "DEGRADED: network output not sane");
   EXPECT_GE(d, 0) << joined(t);
-  EXPECT_GE(find_in(t, "RUNNING: ok", d), 0) << joined(t);
+  EXPECT_GE(find_in(t, "RUNNING: ok", d), 0)
+      << joined(t) << " after " << st.poses << " poses, " << st.frames_skipped << " frames skipped";
 }
 
 TEST(FaultInjection, PublishFailureIsReportedAndRecovers) {
   Config c = shipped_config();
   if (c.model.empty()) GTEST_SKIP() << "no shipped model";
-  c.fault_injection.push_back({FaultKind::kPublishFailure, 25, 5, 0});
+  c.fault_injection.push_back({FaultKind::kPublishFailure, 10, 5, 0});
   std::vector<std::string> t;
   RunStats st;
   EXPECT_EQ(run_and_trace(c, &t, &st), 0);
@@ -284,7 +289,7 @@ TEST(FaultInjection, PublishFailureIsReportedAndRecovers) {
 TEST(FaultInjection, HungInferenceIsAFault) {
   Config c = shipped_config();
   if (c.model.empty()) GTEST_SKIP() << "no shipped model";
-  c.fault_injection.push_back({FaultKind::kInferenceHang, 15, 1, 3000});
+  c.fault_injection.push_back({FaultKind::kInferenceHang, 5, 1, 3000});
   std::vector<std::string> t;
   RunStats st;
   EXPECT_EQ(run_and_trace(c, &t, &st), 3);  // FAULT: the exit code systemd restarts on
