@@ -98,6 +98,50 @@ void BM_Gemm(benchmark::State& state) {
   add_peak_counter(state, 2.0 * m * n * k);
 }
 
+// LINEAR as the network runs it: a chain of `count` products of M x N x K,
+// each with its own packed weights (cold: the chain's weights exceed L2) and
+// the output of one the input of the next (ping-pong activations, like the
+// arena) -- the in-network speed BM_Gemm's warm one is compared with.
+void BM_GemmChain(benchmark::State& state) {
+  const int m = int(state.range(0)), n = int(state.range(1)), k = int(state.range(2));
+  const int count = int(state.range(3));
+  if (n != k) {
+    state.SkipWithError("a chain needs N == K");
+    return;
+  }
+  auto w = rnd(size_t(n) * k);
+  for (float& v : w) v *= 1.0f / 16;  // activations stay O(1) (the bias), never inf or denormal
+  const auto bias = rnd(n);
+  const size_t pf = f32_pack_b_floats(n, k, g_ks->gemm_nr);
+  Buf packed(pf * size_t(count)), x0 = rnd(size_t(m) * k), x1(size_t(m) * n);
+  for (int i = 0; i < count; ++i) f32_pack_b(n, k, g_ks->gemm_nr, w.data(), packed.data() + pf * i);
+  const int panels = (n + g_ks->gemm_nr - 1) / g_ks->gemm_nr;
+  for (auto _ : state) {
+    for (int i = 0; i < count; ++i) {
+      const float* in = (i % 2 == 0 ? x0 : x1).data();
+      float* out = (i % 2 == 0 ? x1 : x0).data();
+      const GemmArgs g{m,
+                       n,
+                       k,
+                       in,
+                       size_t(k),
+                       packed.data() + pf * i,
+                       size_t(g_ks->gemm_nr),
+                       size_t(k) * g_ks->gemm_nr,
+                       true,
+                       bias.data(),
+                       nullptr,
+                       0,
+                       out,
+                       size_t(n),
+                       Act::kNone};
+      g_ks->gemm(g, 0, m, 0, panels);
+    }
+    benchmark::DoNotOptimize(x0.data());
+  }
+  add_peak_counter(state, 2.0 * m * n * k * count);
+}
+
 // The same LINEAR shapes in int8 (u8 activations x s8 weights, int32
 // accumulation, fp32 epilogue; kernels/common/qkernel_set.h), the best int8
 // table this CPU runs. Counter GOP/s (2 M N K per call) and, beside BM_Gemm's
@@ -244,6 +288,7 @@ void gemm_shapes(benchmark::internal::Benchmark* b) {
 }
 BENCHMARK(BM_Gemm)->Apply(gemm_shapes);
 BENCHMARK(BM_QGemm)->Apply(gemm_shapes);
+BENCHMARK(BM_GemmChain)->Args({784, 256, 256, 36})->Args({196, 256, 256, 36});
 BENCHMARK(BM_Attention)
     ->Args({784, 8, 32})
     ->Args({256, 8, 32})
