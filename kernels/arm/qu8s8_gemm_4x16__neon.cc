@@ -67,7 +67,8 @@ void u8_quantize__neon(size_t n, const float* x, float inv_scale, int32_t zero, 
 }
 
 namespace {
-const QKernelSet kSet = {"neon", kMr, kNr, kG, gemm, u8_quantize__neon, qu8s8_dwconv__neon};
+const QKernelSet kSet = {"neon", kMr, kNr, kG,      gemm,    u8_quantize__neon, qu8s8_dwconv__neon,
+                         0,      0,   0,   nullptr, nullptr, nullptr,           nullptr};
 }  // namespace
 
 const QKernelSet* qkernel_set_neon() {

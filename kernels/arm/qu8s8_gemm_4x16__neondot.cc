@@ -64,7 +64,9 @@ void gemm(const QGemmArgs& g, int r0, int r1, int p0, int p1) {
 void u8_quantize__neon(size_t n, const float* x, float inv_scale, int32_t zero, uint8_t* q);
 
 namespace {
-const QKernelSet kSet = {"neondot", kMr, kNr, kG, gemm, u8_quantize__neon, qu8s8_dwconv__neon};
+const QKernelSet kSet = {
+    "neondot", kMr, kNr, kG,      gemm,    u8_quantize__neon, qu8s8_dwconv__neon,
+    0,         0,   0,   nullptr, nullptr, nullptr,           nullptr};
 }  // namespace
 
 const QKernelSet* qkernel_set_neondot() {

@@ -63,11 +63,33 @@ struct QKernelSet {
   void (*quantize)(size_t n, const float* x, float inv_scale, int32_t zero, uint8_t* q);
   // Output rows [oy0, oy1) of an int8 depthwise convolution.
   void (*dwconv_rows)(const QDwConvArgs& a, int oy0, int oy1);
+  // Attention with int8 scores (kernels/common/qs8_attention.h), null where
+  // this table has none (the op then fake-quantises Q and K and runs the fp32
+  // kernel). Like KernelSet's attention: the most query rows per call, the
+  // row-group size, keys per block; the packed K of all heads (attn_kq_bytes)
+  // and V (fp32, E * lk_pad floats); per-thread scratch floats.
+  int attn_max_rows, attn_group_rows, attn_key_block;
+  size_t (*attn_kq_bytes)(int heads, int lk_pad, int d);
+  void (*attn_pack_kv)(int kv_len, int lk_pad, int d, const float* k, size_t ldk, const float* v,
+                       size_t ldv, int h, uint8_t* kq, float* vp);
+  bool (*attn_block)(int rows, int kv_len, int d, const float* q, size_t ldq, const uint8_t* kq,
+                     const float* vp, int lk_pad, float scale, float* o, size_t ldo, int h, int q0,
+                     float* scratch);
+  size_t (*attn_scratch)(int d);
 };
 
 void qu8s8_dwconv__avx512(const QDwConvArgs& a, int oy0, int oy1);
 void qu8s8_dwconv__avx2(const QDwConvArgs& a, int oy0, int oy1);
 void qu8s8_dwconv__neon(const QDwConvArgs& a, int oy0, int oy1);
+
+// int8-score attention (AVX-512 VNNI; QKernelSet::attn_*).
+size_t qs8_attention_kq_bytes__avx512vnni(int heads, int lk_pad, int d);
+void qs8_attention_pack_kv__avx512vnni(int kv_len, int lk_pad, int d, const float* k, size_t ldk,
+                                       const float* v, size_t ldv, int h, uint8_t* kq, float* vp);
+bool qs8_attention_8x2v__avx512vnni(int rows, int kv_len, int d, const float* q, size_t ldq,
+                                    const uint8_t* kq, const float* vp, int lk_pad, float scale,
+                                    float* o, size_t ldo, int h, int q0, float* scratch);
+size_t qs8_attention_scratch__avx512vnni(int d);
 
 // Packs W [n][k] int8 (row-major, as LINEAR stores it) into panels of nr
 // columns with k in groups of kgroup (zero-padded in both):

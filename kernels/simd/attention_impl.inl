@@ -7,6 +7,10 @@
 // against its own maximum with the sums and outputs rescaled (attn_group).
 // K and V are first packed per head (attn_pack_kv): K^T so that keys are the
 // vector dimension of the scoring loop, both contiguous per key block.
+// Where the raw scores come from is a policy (the QK template argument): fp32
+// dot products over packed K^T (AttnF32QK, below), or int8 ones (VNNI,
+// kernels/x86/qs8_attention_8x2v__avx512vnni.cc); the softmax and P V are the
+// same code for both.
 // Included inside an ISA namespace (after vmath.inl).
 
 constexpr int kAttnKB = 128;  // keys per softmax block
@@ -15,11 +19,11 @@ constexpr int kAttnKB = 128;  // keys per softmax block
 // (kt_h[block][p][j], so a block's scoring reads 16 KB of contiguous memory at
 // d = 32), and V as a dense [lk_pad][d] (one head's rows back to back).
 // lk_pad is a multiple of kAttnKB; padded keys are zero.
-static void attn_pack_kv(int kv_len, int lk_pad, int d, const float* k, size_t ldk,
-                         const float* v, size_t ldv, int h, float* kt, float* vp) {
-  float* kdst = kt + size_t(h) * d * lk_pad;
+// V of head h as a dense [lk_pad][d]: one head's rows back to back, whole
+// vectors where they fit, padded keys zero.
+static inline void attn_pack_v(int kv_len, int lk_pad, int d, const float* v, size_t ldv, int h,
+                               float* vp) {
   float* vdst = vp + size_t(h) * d * lk_pad;
-  // V: one head's rows back to back, whole vectors where they fit.
   for (int j = 0; j < kv_len; ++j) {
     const float* vs = v + size_t(j) * ldv + size_t(h) * d;
     float* vr = vdst + size_t(j) * d;
@@ -28,6 +32,12 @@ static void attn_pack_kv(int kv_len, int lk_pad, int d, const float* k, size_t l
     if (p < d) vstore_n(vr + p, vload_n(vs + p, d - p), d - p);
   }
   for (size_t i = size_t(kv_len) * d; i < size_t(lk_pad) * d; ++i) vdst[i] = 0.0f;
+}
+
+static inline void attn_pack_kv(int kv_len, int lk_pad, int d, const float* k, size_t ldk,
+                                const float* v, size_t ldv, int h, float* kt, float* vp) {
+  float* kdst = kt + size_t(h) * d * lk_pad;
+  attn_pack_v(kv_len, lk_pad, d, v, ldv, h, vp);
   // K^T in blocks of kAttnKB keys: a key's row is read once and scattered
   // down its block column (reading columns instead, 1 KB apart, thrashes L1).
   // An ISA with a register transpose does whole 16 x 16 tiles first and
@@ -78,16 +88,33 @@ static inline void attn_dots(int d, const float* qh, size_t ldq, const float* kp
   }
 }
 
+// The fp32 score source: query rows of one head at q (row stride ldq) and a
+// head's K^T packed by attn_pack_kv. block(j0) moves to the key block at j0,
+// keys(js) to the js-th key of it, rows(g) down g query rows; dots<R, S>
+// writes the raw scores q_r . k_j of R rows and S vectors of keys.
+struct AttnF32QK {
+  const float* q;
+  size_t ldq;
+  const float* kp;
+  int d;
+  AttnF32QK rows(int g) const { return {q + size_t(g) * ldq, ldq, kp, d}; }
+  AttnF32QK block(int j0) const { return {q, ldq, kp + size_t(j0) * d, d}; }
+  AttnF32QK keys(int js) const { return {q, ldq, kp + js, d}; }
+  template <int R, int S>
+  void dots(V (*acc)[S]) const {
+    attn_dots<R, S>(d, q, ldq, kp, acc);
+  }
+};
+
 // Raw scores of R query rows against S vectors of keys starting at kp (a
 // column of a packed K^T block): sbuf[r][j] = q_r . k_j for j < S * kLanes,
 // and the rows' running maxima mx. Keys at n and beyond are zero padding:
 // their scores become -inf, out of the maximum and weighted 2^-125 (below any
 // row sum's rounding) in the exponent pass.
-template <int R, int S>
-static inline void attn_score(int d, const float* qh, size_t ldq, const float* kp, int n,
-                              float* sbuf, V* mx) {
+template <int R, int S, class QK>
+static inline void attn_score(const QK& qk, int n, float* sbuf, V* mx) {
   V acc[R][S];
-  attn_dots<R, S>(d, qh, ldq, kp, acc);
+  qk.template dots<R, S>(acc);
 #pragma GCC unroll 8
   for (int r = 0; r < R; ++r) {
 #pragma GCC unroll 4
@@ -117,11 +144,11 @@ static inline void attn_score(int d, const float* qh, size_t ldq, const float* k
 // where the exponential does not saturate to +inf), straight from the score
 // registers, and added into the rows' lane sums bsum. Padded
 // keys (n and beyond; only where !kFull) get weight 0.
-template <int R, int S, bool kFull>
-static inline void attn_score_exp(int d, const float* qh, size_t ldq, const float* kp, int n,
-                                  V vc, const float* mrow, float* sbuf, V* bsum) {
+template <int R, int S, bool kFull, class QK>
+static inline void attn_score_exp(const QK& qk, int n, V vc, const float* mrow, float* sbuf,
+                                  V* bsum) {
   V acc[R][S];
-  attn_dots<R, S>(d, qh, ldq, kp, acc);
+  qk.template dots<R, S>(acc);
 #pragma GCC unroll 8
   for (int r = 0; r < R; ++r) {
     const V neg_m = vset1(-mrow[r]);
@@ -149,13 +176,13 @@ static inline void attn_score_exp(int d, const float* qh, size_t ldq, const floa
 
 // One sub-block of SV vectors of keys at kp with `left` keys of the block
 // left: the padded variant only where the sub-block runs past them.
-template <int R, int SV>
-static inline void attn_score_exp_any(int d, const float* qh, size_t ldq, const float* kp, int left,
-                                      V vc, const float* ref, float* sbuf, V* bsum) {
+template <int R, int SV, class QK>
+static inline void attn_score_exp_any(const QK& qk, int left, V vc, const float* ref, float* sbuf,
+                                      V* bsum) {
   if (left >= SV * kLanes) {
-    attn_score_exp<R, SV, true>(d, qh, ldq, kp, left, vc, ref, sbuf, bsum);
+    attn_score_exp<R, SV, true>(qk, left, vc, ref, sbuf, bsum);
   } else {
-    attn_score_exp<R, SV, false>(d, qh, ldq, kp, left, vc, ref, sbuf, bsum);
+    attn_score_exp<R, SV, false>(qk, left, vc, ref, sbuf, bsum);
   }
 }
 
@@ -171,10 +198,9 @@ static inline void attn_score_exp_any(int d, const float* qh, size_t ldq, const 
 // nats below 0), returns false with mrow and lrow untouched, and the caller
 // redoes the block with its maximum. The row sums stay lane sums (lrow is
 // [R][kLanes]) until the chunk's end: no horizontal sum per block.
-template <int R, int SV>
-static inline bool attn_weights_lazy(bool first, int kb, int d, const float* qh, size_t ldq,
-                                     const float* kp, V vc, float* sbuf, float* mrow,
-                                     float* lrow) {
+template <int R, int SV, class QK>
+static inline bool attn_weights_lazy(bool first, int kb, const QK& qk, V vc, float* sbuf,
+                                     float* mrow, float* lrow) {
   float ref[R];
   for (int r = 0; r < R; ++r) ref[r] = first ? 0.0f : mrow[r];
   V bsum[R];
@@ -182,10 +208,10 @@ static inline bool attn_weights_lazy(bool first, int kb, int d, const float* qh,
   for (int r = 0; r < R; ++r) bsum[r] = vzero();
   for (int js = 0; js < kb;) {
     if (SV > 1 && kb - js <= kLanes) {
-      attn_score_exp_any<R, 1>(d, qh, ldq, kp + js, kb - js, vc, ref, sbuf + js, bsum);
+      attn_score_exp_any<R, 1>(qk.keys(js), kb - js, vc, ref, sbuf + js, bsum);
       js += kLanes;
     } else {
-      attn_score_exp_any<R, SV>(d, qh, ldq, kp + js, kb - js, vc, ref, sbuf + js, bsum);
+      attn_score_exp_any<R, SV>(qk.keys(js), kb - js, vc, ref, sbuf + js, bsum);
       js += SV * kLanes;
     }
   }
@@ -256,13 +282,12 @@ static inline void attn_pv(int kb, const float* vh, size_t ldv, const int* dcnt,
 // 2^(vc s - m) with m the running maximum of vc s (kept in mrow); the raw
 // scores' maximum is taken in registers while they are stored, and scaling
 // and subtracting are one FMA in the exponent pass.
-template <int R, int SV, int DV>
-static inline void attn_group(bool first, int kb, int d, const float* qh, size_t ldq,
-                              const float* kp, const float* vh, size_t ldv, V vc, float c,
-                              const int* dcnt, float* sbuf, float* obuf, float* mrow,
+template <int R, int SV, int DV, class QK>
+static inline void attn_group(bool first, int kb, const QK& qk, const float* vh, size_t ldv, V vc,
+                              float c, const int* dcnt, float* sbuf, float* obuf, float* mrow,
                               float* lrow) {
   static_assert(kAttnKB % (SV * kLanes) == 0, "key block must hold whole scoring sub-blocks");
-  if (attn_weights_lazy<R, SV>(first, kb, d, qh, ldq, kp, vc, sbuf, mrow, lrow)) {
+  if (attn_weights_lazy<R, SV>(first, kb, qk, vc, sbuf, mrow, lrow)) {
     attn_pv<R, DV>(kb, vh, ldv, dcnt, sbuf, nullptr, obuf);
     return;
   }
@@ -273,10 +298,10 @@ static inline void attn_group(bool first, int kb, int d, const float* qh, size_t
   // vector, are scored one vector wide (784 = 6 x 128 + 16 keys).
   for (int js = 0; js < kb;) {
     if (SV > 1 && kb - js <= kLanes) {
-      attn_score<R, 1>(d, qh, ldq, kp + js, kb - js, sbuf + js, mx);
+      attn_score<R, 1>(qk.keys(js), kb - js, sbuf + js, mx);
       js += kLanes;
     } else {
-      attn_score<R, SV>(d, qh, ldq, kp + js, kb - js, sbuf + js, mx);
+      attn_score<R, SV>(qk.keys(js), kb - js, sbuf + js, mx);
       js += SV * kLanes;
     }
   }
@@ -308,12 +333,12 @@ static inline void attn_group(bool first, int kb, int d, const float* qh, size_t
   attn_pv<R, DV>(kb, vh, ldv, dcnt, sbuf, diff, obuf);
 }
 
-// Query rows [q0, q0 + rows) of head h (rows <= kAttnChunk): key blocks outer,
-// row groups of R inner.
-template <int R, int SV, int DV>
-static void attn_chunk(int rows, int kv_len, int d, const float* q, size_t ldq, const float* kt_h,
-                       const float* vp_h, float scale, float* o, size_t ldo, int h, int q0,
-                       float* scratch) {
+// Query rows [q0, q0 + rows) of head h (rows <= kAttnChunk), their scores
+// from qk (positioned at row q0 of head h, key 0): key blocks outer, row
+// groups of R inner.
+template <int R, int SV, int DV, class QK>
+static void attn_chunk(int rows, int kv_len, int d, const QK& qk, const float* vp_h, float scale,
+                       float* o, size_t ldo, int h, int q0, float* scratch) {
   float* sbuf = scratch;                          // [R][kAttnKB]
   float* obuf = scratch + R * kAttnKB;            // [rows][DV * kLanes]
   float* mrow = obuf + kAttnChunk * DV * kLanes;  // [rows]
@@ -329,26 +354,25 @@ static void attn_chunk(int rows, int kv_len, int d, const float* q, size_t ldq, 
     vstore(lrow + r * kLanes, vzero());
     for (int t = 0; t < DV; ++t) vstore(obuf + (r * DV + t) * kLanes, vzero());
   }
-  const float* qh = q + size_t(q0) * ldq + size_t(h) * d;
   const float c = scale * 1.44269504088896341f;  // base-2 softmax (attn_group)
   const V vc = vset1(c);
   for (int j0 = 0; j0 < kv_len; j0 += kAttnKB) {
     const int kb = kv_len - j0 < kAttnKB ? kv_len - j0 : kAttnKB;
-    const float* kp = kt_h + size_t(j0) * d;  // block j0 / kAttnKB
+    const QK qb = qk.block(j0);  // block j0 / kAttnKB
     const float* vh = vp_h + size_t(j0) * d;
     const size_t ldv = size_t(d);
     int g = 0;
     for (; g + R <= rows; g += R) {
-      attn_group<R, SV, DV>(j0 == 0, kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vc, c, dcnt,
-                            sbuf, obuf + g * DV * kLanes, mrow + g, lrow + g * kLanes);
+      attn_group<R, SV, DV>(j0 == 0, kb, qb.rows(g), vh, ldv, vc, c, dcnt, sbuf,
+                            obuf + g * DV * kLanes, mrow + g, lrow + g * kLanes);
     }
     const int left = rows - g;
-#define APRT_ATTN_TAIL(RR)                                                                      \
-  case RR:                                                                                      \
-    if constexpr (R > RR) {                                                                     \
-      attn_group<RR, SV, DV>(j0 == 0, kb, d, qh + size_t(g) * ldq, ldq, kp, vh, ldv, vc, c, dcnt, sbuf, \
-                             obuf + g * DV * kLanes, mrow + g, lrow + g * kLanes);             \
-    }                                                                                           \
+#define APRT_ATTN_TAIL(RR)                                                         \
+  case RR:                                                                         \
+    if constexpr (R > RR) {                                                        \
+      attn_group<RR, SV, DV>(j0 == 0, kb, qb.rows(g), vh, ldv, vc, c, dcnt, sbuf,  \
+                             obuf + g * DV * kLanes, mrow + g, lrow + g * kLanes); \
+    }                                                                              \
     break;
     switch (left) {
       APRT_ATTN_TAIL(1)
@@ -372,18 +396,17 @@ static void attn_chunk(int rows, int kv_len, int d, const float* q, size_t ldq, 
   }
 }
 
-// Query rows [q0, q0 + rows) of head h, rows <= kAttnChunk, over K and V
-// packed by attn_pack_kv. Returns false if the head width needs more than 8
-// vectors (the caller then uses the reference kernel).
-template <int R, int SV>
-static bool attn_block(int rows, int kv_len, int d, const float* q, size_t ldq, const float* kt,
-                       const float* vp, int lk_pad, float scale, float* o, size_t ldo, int h,
-                       int q0, float* scratch) {
+// Query rows [q0, q0 + rows) of head h, rows <= kAttnChunk, their scores
+// from qk (positioned as attn_chunk says), V packed by attn_pack_v. Returns
+// false if the head width needs more than 8 vectors (the caller then uses the
+// reference kernel).
+template <int R, int SV, class QK>
+static bool attn_block_qk(int rows, int kv_len, int d, const QK& qk, const float* vp, int lk_pad,
+                          float scale, float* o, size_t ldo, int h, int q0, float* scratch) {
   static_assert(R <= 8, "row groups are dispatched up to 8");
-  const float* kt_h = kt + size_t(h) * d * lk_pad;
   const float* vp_h = vp + size_t(h) * d * lk_pad;
-#define APRT_ATTN_DV(DVV)                                                                 \
-  attn_chunk<R, SV, DVV>(rows, kv_len, d, q, ldq, kt_h, vp_h, scale, o, ldo, h, q0, scratch); \
+#define APRT_ATTN_DV(DVV)                                                           \
+  attn_chunk<R, SV, DVV>(rows, kv_len, d, qk, vp_h, scale, o, ldo, h, q0, scratch); \
   return true;
   switch ((d + kLanes - 1) / kLanes) {
     case 1: APRT_ATTN_DV(1)
@@ -397,4 +420,14 @@ static bool attn_block(int rows, int kv_len, int d, const float* q, size_t ldq, 
     default: return false;
   }
 #undef APRT_ATTN_DV
+}
+
+// The fp32 attention: query rows [q0, q0 + rows) of head h over K and V
+// packed by attn_pack_kv.
+template <int R, int SV>
+static bool attn_block(int rows, int kv_len, int d, const float* q, size_t ldq, const float* kt,
+                       const float* vp, int lk_pad, float scale, float* o, size_t ldo, int h,
+                       int q0, float* scratch) {
+  const AttnF32QK qk{q + size_t(q0) * ldq + size_t(h) * d, ldq, kt + size_t(h) * d * lk_pad, d};
+  return attn_block_qk<R, SV>(rows, kv_len, d, qk, vp, lk_pad, scale, o, ldo, h, q0, scratch);
 }

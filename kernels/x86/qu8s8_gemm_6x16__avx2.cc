@@ -92,7 +92,8 @@ void quantize(size_t n, const float* x, float inv_scale, int32_t zero, uint8_t* 
   }
 }
 
-const QKernelSet kSet = {"avx2", kMr, kNr, kG, gemm, quantize, qu8s8_dwconv__avx2};
+const QKernelSet kSet = {"avx2", kMr, kNr, kG,      gemm,    quantize, qu8s8_dwconv__avx2,
+                         0,      0,   0,   nullptr, nullptr, nullptr,  nullptr};
 
 }  // namespace
 

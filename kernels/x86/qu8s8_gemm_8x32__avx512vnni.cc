@@ -95,7 +95,20 @@ void quantize(size_t n, const float* x, float inv_scale, int32_t zero, uint8_t* 
   }
 }
 
-const QKernelSet kSet = {"avx512vnni", kMr, kNr, kG, gemm, quantize, qu8s8_dwconv__avx512};
+const QKernelSet kSet = {"avx512vnni",
+                         kMr,
+                         kNr,
+                         kG,
+                         gemm,
+                         quantize,
+                         qu8s8_dwconv__avx512,
+                         256,
+                         8,
+                         128,
+                         qs8_attention_kq_bytes__avx512vnni,
+                         qs8_attention_pack_kv__avx512vnni,
+                         qs8_attention_8x2v__avx512vnni,
+                         qs8_attention_scratch__avx512vnni};
 
 }  // namespace
 

@@ -3,7 +3,9 @@
 // others are skipped, and say so): GEMM with every epilogue, called whole and
 // in row/panel pieces as the thread pool splits it, and the quantiser on
 // halfway values, huge values, infinities and NaN; the depthwise convolution
-// on odd channel counts, kernel sizes, strides and asymmetric padding.
+// on odd channel counts, kernel sizes, strides and asymmetric padding. The
+// int8-score attention (where a table has one) against the fp32 reference
+// over fake-quantised Q and K, to the fp32 softmax's tolerance.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,6 +18,9 @@
 
 #include "kernels/common/cpu_features.h"
 #include "kernels/common/qkernel_set.h"
+#include "kernels/common/qs8_attention.h"
+#include "kernels/ref/f32_attention__ref.h"
+#include "kernels/ref/qs8_attention__ref.h"
 #include "kernels/ref/qs8_dwconv2d__ref.h"
 #include "kernels/ref/qs8_gemm__ref.h"
 
@@ -207,6 +212,102 @@ TEST_P(QKernels, DwConvBitExactOnOddShapes) {
       for (size_t i = out; i < got.size(); ++i) ASSERT_EQ(got[i], -7.0f) << "wrote past the end";
     }
   }
+}
+
+// Runs the table's int8-score attention over every head and query chunk as
+// the op does; false if the table has none or refuses the shape.
+bool q8_attention(const QKernelSet& qs, const AttentionShape& s, const std::vector<float>& q,
+                  const std::vector<float>& k, const std::vector<float>& v, float scale,
+                  std::vector<float>* out) {
+  if (!qs.attn_block) return false;
+  const int e = s.heads * s.head_dim, d = s.head_dim;
+  const int lk_pad = (s.kv_len + qs.attn_key_block - 1) / qs.attn_key_block * qs.attn_key_block;
+  std::vector<uint8_t> kq(qs.attn_kq_bytes(s.heads, lk_pad, d));
+  std::vector<float> vp(size_t(e) * lk_pad), scratch(qs.attn_scratch(d));
+  for (int h = 0; h < s.heads; ++h) {
+    qs.attn_pack_kv(s.kv_len, lk_pad, d, k.data(), size_t(e), v.data(), size_t(e), h, kq.data(),
+                    vp.data());
+  }
+  bool ok = true;
+  for (int h = 0; h < s.heads; ++h) {
+    for (int q0 = 0; q0 < s.q_len; q0 += qs.attn_max_rows) {
+      const int rows = std::min(qs.attn_max_rows, s.q_len - q0);
+      ok &= qs.attn_block(rows, s.kv_len, d, q.data(), size_t(e), kq.data(), vp.data(), lk_pad,
+                          scale, out->data(), size_t(e), h, q0, scratch.data());
+    }
+  }
+  return ok;
+}
+
+TEST(QAttention, QuantisationRoundsToNearestEvenWithinTheRowScale) {
+  const float x[5] = {-3.0f, 1.5f, 0.0f, 3.0f, 0.75f};
+  float inv = 0.0f;
+  const float scale = qs8_row_scale(x, 5, &inv);
+  EXPECT_FLOAT_EQ(scale, 3.0f / 127.0f);
+  EXPECT_EQ(qs8_round(x[0], inv), -127);
+  EXPECT_EQ(qs8_round(x[3], inv), 127);
+  EXPECT_EQ(qs8_round(x[1], inv), 64);  // 63.5: ties to even
+  const float zero[3] = {0.0f, 0.0f, 0.0f};
+  EXPECT_EQ(qs8_row_scale(zero, 3, &inv), 0.0f);
+  EXPECT_EQ(qs8_round(0.0f, inv), 0);
+  std::vector<float> y(5);
+  qs8_fake_quantize_rows(1, 1, 5, x, 5, y.data());
+  EXPECT_FLOAT_EQ(y[3], 3.0f);
+  EXPECT_FLOAT_EQ(y[1], 64.0f * scale);
+}
+
+TEST_P(QKernels, AttentionScoresInt8OnOddShapes) {
+  if (!ks_->attn_block) GTEST_SKIP() << GetParam().name << " has no int8-score attention";
+  std::mt19937 rng(99);
+  auto pick = [&](int lo, int hi) { return int(rng() % unsigned(hi - lo + 1)) + lo; };
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  int ran = 0;
+  for (int round = 0; round < 40; ++round) {
+    const int heads = pick(1, 8), d = round < 6 ? 32 : 4 * pick(1, 16), lq = pick(1, 300);
+    const int lk = round % 4 == 0 ? pick(129, 420) : pick(1, 160);
+    const int e = heads * d;
+    const AttentionShape s{lq, lk, heads, d};
+    // Scores of a few nats (gain 3) and, every third round, tens of nats
+    // across key blocks (gain 30): the lazy rescaling's fallback runs too.
+    const float gain = round % 3 == 2 ? 30.0f : 3.0f;
+    std::vector<float> q(size_t(lq) * e), k(size_t(lk) * e), v(size_t(lk) * e);
+    for (float& x : q) x = u(rng) * gain;
+    for (float& x : k) x = u(rng);
+    for (float& x : v) x = u(rng);
+    const float scale = 1.0f / std::sqrt(float(d));
+    std::vector<float> want(size_t(lq) * e), got(want.size(), -3.0f),
+        rs(qs8_attention__ref_scratch(s));
+    qs8_attention__ref(s, q.data(), k.data(), v.data(), scale, want.data(), rs.data());
+    ASSERT_TRUE(q8_attention(*ks_, s, q, k, v, scale, &got)) << "d=" << d;
+    ++ran;
+    for (size_t i = 0; i < got.size(); ++i) {
+      ASSERT_NEAR(got[i], want[i], 2e-5 * (1.0 + std::fabs(want[i])))
+          << "d=" << d << " lq=" << lq << " lk=" << lk << " heads=" << heads << " at " << i;
+    }
+  }
+  EXPECT_EQ(ran, 40);
+}
+
+// What the int8 scores cost against fp32 ones on the same data: a bound that
+// catches a broken quantisation (a wrong scale or rounding moves outputs by
+// far more), not an accuracy claim (docs/int8.md measures the pose).
+TEST(QAttention, ReferenceStaysCloseToFp32Attention) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  const AttentionShape s{50, 200, 4, 32};
+  const int e = 128;
+  std::vector<float> q(size_t(50) * e), k(size_t(200) * e), v(size_t(200) * e);
+  for (float& x : q) x = 3.0f * u(rng);
+  for (float& x : k) x = u(rng);
+  for (float& x : v) x = u(rng);
+  std::vector<float> a(q.size()), b(q.size()), r1(f32_attention__ref_scratch(s)),
+      r2(qs8_attention__ref_scratch(s));
+  f32_attention__ref(s, q.data(), k.data(), v.data(), 0.177f, a.data(), r1.data());
+  qs8_attention__ref(s, q.data(), k.data(), v.data(), 0.177f, b.data(), r2.data());
+  double worst = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, double(std::fabs(a[i] - b[i])));
+  EXPECT_LT(worst, 0.02);
+  EXPECT_GT(worst, 0.0);  // it did quantise
 }
 
 INSTANTIATE_TEST_SUITE_P(Isa, QKernels, ::testing::ValuesIn(kQIsas),

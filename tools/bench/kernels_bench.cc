@@ -213,6 +213,39 @@ void BM_Attention(benchmark::State& state) {
   add_peak_counter(state, 4.0 * l * l * e);
 }
 
+// The same attention with int8 scores (kernels/common/qs8_attention.h): Q and
+// K quantised per row and head, the int8 table's kernel; "GFLOP/s" counts the
+// fp32 attention's flops, so it compares with BM_Attention directly.
+void BM_QAttention(benchmark::State& state) {
+  const QKernelSet* qs = g_qs;
+  if (!qs || !qs->attn_block) {
+    state.SkipWithError("no int8-score attention for this CPU");
+    return;
+  }
+  const int l = int(state.range(0)), heads = int(state.range(1)), d = int(state.range(2));
+  const int e = heads * d;
+  const auto q = rnd(size_t(l) * e), k = rnd(size_t(l) * e), v = rnd(size_t(l) * e);
+  const int lk_pad = (l + qs->attn_key_block - 1) / qs->attn_key_block * qs->attn_key_block;
+  std::vector<uint8_t> kq(qs->attn_kq_bytes(heads, lk_pad, d));
+  Buf vp(size_t(e) * lk_pad), o(size_t(l) * e), scratch(qs->attn_scratch(d));
+  for (auto _ : state) {
+    for (int h = 0; h < heads; ++h) {
+      qs->attn_pack_kv(l, lk_pad, d, k.data(), size_t(e), v.data(), size_t(e), h, kq.data(),
+                       vp.data());
+    }
+    for (int h = 0; h < heads; ++h) {
+      for (int q0 = 0; q0 < l; q0 += qs->attn_max_rows) {
+        const int rows = l - q0 < qs->attn_max_rows ? l - q0 : qs->attn_max_rows;
+        qs->attn_block(rows, l, d, q.data(), size_t(e), kq.data(), vp.data(), lk_pad, 0.17f,
+                       o.data(), size_t(e), h, q0, scratch.data());
+      }
+    }
+    benchmark::DoNotOptimize(o.data());
+  }
+  add_peak_counter(state, 4.0 * l * l * e);
+  state.SetLabel(qs->isa);
+}
+
 void BM_Depthwise(benchmark::State& state) {
   const int hw = int(state.range(0)), c = int(state.range(1)), kk = int(state.range(2)),
             s = int(state.range(3));
@@ -294,6 +327,7 @@ BENCHMARK(BM_Attention)
     ->Args({256, 8, 32})
     ->Args({196, 8, 32})
     ->Args({64, 8, 32});
+BENCHMARK(BM_QAttention)->Args({784, 8, 32})->Args({196, 8, 32});
 // LAYERNORM over rows x width (the transformers' 784 / 196 tokens of 256).
 void BM_LayerNorm(benchmark::State& state) {
   const int rows = int(state.range(0)), n = int(state.range(1));

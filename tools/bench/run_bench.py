@@ -63,10 +63,11 @@ def ort_model(s, d):
     return os.path.join(d, "model_portable.onnx" if s == "points" else "model.onnx")
 
 
-def ensure_int8(d):
+def ensure_int8(d, attention=False):
     """Calibrated on demo-drive frames (camera) or on the golden inputs (BEV: any
-    input of the right shape serves a speed measurement)."""
-    out = os.path.join(d, "model_int8.aprt")
+    input of the right shape serves a speed measurement). attention: the
+    attention scores int8 too (quantize --int8-attention)."""
+    out = os.path.join(d, "model_int8_attention.aprt" if attention else "model_int8.aprt")
     if not os.path.exists(out):
         print(f"run_bench: quantising {d}/model.aprt", flush=True)
         env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "tools"), PYTHONWARNINGS="ignore")
@@ -79,7 +80,8 @@ def ensure_int8(d):
             calib = os.path.join(d, "calibration.npy")
             np.save(calib, np.abs(x.transpose(0, 2, 3, 1)))
         sh([PYTHON, "-m", "aprt_tools", "quantize", os.path.join(d, "model.aprt"),
-            "--calibration", calib, "--frames", "4", "-o", out], env=env)
+            "--calibration", calib, "--frames", "4", "-o", out] +
+           (["--int8-attention"] if attention else []), env=env)
     return out
 
 
@@ -123,6 +125,8 @@ def main():
     ap.add_argument("--models", default=os.path.join(ROOT, "build", "bench"))
     ap.add_argument("--markdown", help="also write the table to this file")
     ap.add_argument("--no-int8", action="store_true", help="fp32 only")
+    ap.add_argument("--int8-attention", action="store_true",
+                    help="the int8 model with int8 attention scores too (docs/int8.md)")
     ap.add_argument("--bev", action="store_true",
                     help="also the LiDAR BEV model (256 x 256 x 2 histogram, same network)")
     ap.add_argument("--points", action="store_true",
@@ -141,7 +145,7 @@ def main():
     ours = {(s, t): [] for s in sizes for t in threads}
     int8 = {(s, t): [] for s in sizes for t in threads}
     # (int8 of the points model: not measured; its policy is the image model's)
-    int8_models = {} if a.no_int8 else {s: ensure_int8(models[s]) for s in sizes
+    int8_models = {} if a.no_int8 else {s: ensure_int8(models[s], a.int8_attention) for s in sizes
                                          if s != "points"}
     info = {}
     for r in range(a.rounds):
@@ -158,7 +162,8 @@ def main():
     now = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
     head = (f"ONNX Runtime (onnxruntime-node 1.30.0, graph optimisation 'all', sequential) vs aprt, "
             f"{a.rounds} interleaved rounds x {a.runs} runs each; {cpu_name()}, "
-            f"{os.cpu_count()} cores; {now}.")
+            f"{os.cpu_count()} cores; {now}." +
+            (" int8: attention scores int8 too." if a.int8_attention and not a.no_int8 else ""))
     q = "" if a.no_int8 else " aprt int8 median ms | int8 p99 | ORT / int8 |"
     lines = ["| input | threads | ORT median ms | ORT p99 | aprt median ms | aprt p99 | ORT / aprt |" +
              q + " aprt kernels | allocations/frame |",

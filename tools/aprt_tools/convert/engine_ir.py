@@ -231,6 +231,8 @@ def run_op(op: Op, get) -> list:
         q = q.reshape(-1, h, d).transpose(1, 0, 2)
         k = k.reshape(-1, h, d).transpose(1, 0, 2)
         v = v.reshape(-1, h, d).transpose(1, 0, 2)
+        if p.get("scores"):  # int8 scores: Q and K per row and head (qs8_attention.h)
+            q, k = fake_quantize_rows(q), fake_quantize_rows(k)
         s = (q @ k.transpose(0, 2, 1)) * p["scale"]
         s = np.exp(s - s.max(axis=-1, keepdims=True))
         s /= s.sum(axis=-1, keepdims=True)
@@ -266,6 +268,16 @@ def run_op(op: Op, get) -> list:
         raise ValueError(f"no semantics for op {op}")
     return [y.reshape(op.outputs[0].shape)]
 
+
+
+def fake_quantize_rows(x: np.ndarray) -> np.ndarray:
+    """Symmetric int8 per row (last axis) and back, rounding as the engine does
+    (kernels/common/qs8_attention.h): scale = max|x| / 127, q = rne(x * 127 / max|x|)."""
+    x = np.asarray(x, np.float32)
+    amax = np.abs(x).max(axis=-1, keepdims=True)
+    inv = np.where(amax > 0, np.float32(127.0) / np.where(amax > 0, amax, 1), 0).astype(np.float32)
+    q = np.rint(x * inv).astype(np.float32)
+    return q * (amax / np.float32(127.0)).astype(np.float32)
 
 def run(graph: EngineGraph, feeds: dict, keep_all: bool = True) -> dict:
     """Run the graph; `feeds` maps input Tensor -> array. Returns Tensor id -> value."""

@@ -35,7 +35,12 @@ def _params(code: int, raw: list) -> dict:
         return dict(act=raw[0])  # int8 LINEAR's input quantisation is added by the caller
     if code == spec.OP_LAYERNORM:
         return dict(eps=_f(raw[0]))
-    if code in (spec.OP_ATTENTION, spec.OP_CROSS_ATTENTION_1Q):
+    if code == spec.OP_ATTENTION:
+        p = dict(heads=raw[0], scale=_f(raw[1]))
+        if raw[2]:
+            p["scores"] = raw[2]
+        return p
+    if code == spec.OP_CROSS_ATTENTION_1Q:
         return dict(heads=raw[0], scale=_f(raw[1]))
     if code == spec.OP_ACTIVATION:
         return dict(act=raw[0])

@@ -76,7 +76,9 @@ def _op_params(op) -> list:
         return [p.get("act", 0)]
     if c == spec.OP_LAYERNORM:
         return [f(p["eps"])]
-    if c in (spec.OP_ATTENTION, spec.OP_CROSS_ATTENTION_1Q):
+    if c == spec.OP_ATTENTION:  # scores: 0 fp32, 1 int8 (FORMAT.md)
+        return [p["heads"], f(p["scale"]), int(p.get("scores", 0))]
+    if c == spec.OP_CROSS_ATTENTION_1Q:
         return [p["heads"], f(p["scale"])]
     if c == spec.OP_ACTIVATION:
         return [p["act"]]

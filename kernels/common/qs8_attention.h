@@ -1,0 +1,30 @@
+// int8 attention scores (issue #4; the op's precision policy, FORMAT.md):
+// Q and K are quantised dynamically — per row and head, symmetric int8 — and
+// the raw score of query row i and key j is
+//   s_ij = (float(sum_p q8_ip k8_jp) * sk_j) * sq_i,
+// the int32 sum exact; softmax and P V stay fp32. No calibration: each row's
+// scale is its own max |x| / 127, so an outlier row costs only its own
+// precision. The rounding below is the one every kernel uses.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+namespace aprt::kernels {
+
+// Scale of one row of n values: max |x| / 127 (0 for an all-zero row), and
+// *inv = 127 / max |x| (0 then), the multiplier qs8_round uses.
+inline float qs8_row_scale(const float* x, int n, float* inv) {
+  float amax = 0.0f;
+  for (int i = 0; i < n; ++i) amax = std::fmax(amax, std::fabs(x[i]));
+  *inv = amax > 0.0f ? 127.0f / amax : 0.0f;
+  return amax / 127.0f;
+}
+
+// x * inv rounded to nearest, ties to even: in [-127, 127] for |x| <= max |x|.
+inline int32_t qs8_round(float x, float inv) {
+  return static_cast<int32_t>(std::nearbyint(x * inv));
+}
+
+}  // namespace aprt::kernels
