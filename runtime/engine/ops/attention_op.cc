@@ -44,17 +44,24 @@ void pack_task(void* data, int head, int) {
                             t->scratch, t->scratch + e * s.lk_pad);
 }
 
+// A (head, query chunk) task: its head, first query row and row count.
+struct BlockRows {
+  int h, q0, rows;
+};
+BlockRows block_rows(const AttnState& s, int task) {
+  const int c = task % s.chunks.tasks;
+  return {task / s.chunks.tasks, s.chunks.begin(c), s.chunks.end(c) - s.chunks.begin(c)};
+}
+
 void block_task(void* data, int task, int thread) {
   const auto* t = static_cast<const AttnTask*>(data);
   const OpNode& node = *t->node;
   const auto& s = node.state_as<AttnState>();
-  const int e = s.shape.heads * s.shape.head_dim;
-  const int h = task / s.chunks.tasks, c = task % s.chunks.tasks;
-  const int q0 = s.chunks.begin(c), rows = s.chunks.end(c) - q0;
-  float* kt = t->scratch;
-  (void)node.ks->attn_block(rows, s.shape.kv_len, s.shape.head_dim, t->q, size_t(e), kt,
-                            kt + size_t(e) * s.lk_pad, s.lk_pad, s.scale, node.out[0]->f32(),
-                            size_t(e), h, q0, t->ctx->thread_scratch[thread]);
+  const size_t e = size_t(s.shape.heads) * s.shape.head_dim;
+  const BlockRows b = block_rows(s, task);
+  (void)node.ks->attn_block(b.rows, s.shape.kv_len, s.shape.head_dim, t->q, e, t->scratch,
+                            t->scratch + e * s.lk_pad, s.lk_pad, s.scale, node.out[0]->f32(), e,
+                            b.h, b.q0, t->ctx->thread_scratch[thread]);
 }
 
 // The int8 kernel's scratch: V packed (fp32, E * lk_pad floats), then K's int8 packing.
@@ -70,12 +77,11 @@ void q8_block_task(void* data, int task, int thread) {
   const auto* t = static_cast<const AttnTask*>(data);
   const OpNode& node = *t->node;
   const auto& s = node.state_as<AttnState>();
-  const int e = s.shape.heads * s.shape.head_dim;
-  const int h = task / s.chunks.tasks, c = task % s.chunks.tasks;
-  const int q0 = s.chunks.begin(c), rows = s.chunks.end(c) - q0;
-  (void)node.qks->attn_block(rows, s.shape.kv_len, s.shape.head_dim, t->q, size_t(e),
-                             reinterpret_cast<const uint8_t*>(t->scratch + size_t(e) * s.lk_pad),
-                             t->scratch, s.lk_pad, s.scale, node.out[0]->f32(), size_t(e), h, q0,
+  const size_t e = size_t(s.shape.heads) * s.shape.head_dim;
+  const BlockRows b = block_rows(s, task);
+  (void)node.qks->attn_block(b.rows, s.shape.kv_len, s.shape.head_dim, t->q, e,
+                             reinterpret_cast<const uint8_t*>(t->scratch + e * s.lk_pad),
+                             t->scratch, s.lk_pad, s.scale, node.out[0]->f32(), e, b.h, b.q0,
                              t->ctx->thread_scratch[thread]);
 }
 
