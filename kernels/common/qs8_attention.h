@@ -14,17 +14,26 @@
 namespace aprt::kernels {
 
 // Scale of one row of n values: max |x| / 127 (0 for an all-zero row), and
-// *inv = 127 / max |x| (0 then), the multiplier qs8_round uses.
+// *inv = 127 / max |x| (0 then), the multiplier qs8_round uses. A NaN in the
+// row makes the scale NaN (and an infinity infinite), so a garbage activation
+// reaches the scores as NaN -- the pose check flags it -- instead of being
+// quantised into a plausible value.
 inline float qs8_row_scale(const float* x, int n, float* inv) {
   float amax = 0.0f;
-  for (int i = 0; i < n; ++i) amax = std::fmax(amax, std::fabs(x[i]));
+  for (int i = 0; i < n; ++i) {
+    const float a = std::fabs(x[i]);
+    if (a > amax || std::isnan(a)) amax = a;
+    if (std::isnan(amax)) break;
+  }
   *inv = amax > 0.0f ? 127.0f / amax : 0.0f;
   return amax / 127.0f;
 }
 
-// x * inv rounded to nearest, ties to even: in [-127, 127] for |x| <= max |x|.
+// x * inv rounded to nearest, ties to even: in [-127, 127] for |x| <= max |x|;
+// 0 where x * inv is not finite (a NaN row: its scale carries the NaN).
 inline int32_t qs8_round(float x, float inv) {
-  return static_cast<int32_t>(std::nearbyint(x * inv));
+  const float y = x * inv;
+  return std::isfinite(y) ? static_cast<int32_t>(std::nearbyint(y)) : 0;
 }
 
 }  // namespace aprt::kernels

@@ -34,14 +34,20 @@ static size_t attn_q8_head_bytes(int lk_pad, int d) {
 
 // One row of d values (d % 4 == 0, d <= 128) quantised as qs8_attention.h
 // says, 16 at a time: max |x| exact, then x * inv rounded half to even by
-// vcvtps2dq (MXCSR's default mode) -- the same bits as qs8_round. Writes d
+// vcvtps2dq (MXCSR's default mode) -- the same bits as qs8_round (a NaN
+// row: scale NaN, its bytes whatever vcvtps2dq makes of NaN). Writes d
 // bytes of q8 + bias (0 or 128) to out and returns the scale; *sum gets
 // sum_p q8.
 static float attn_q8_row(const float* x, int d, int bias, uint8_t* out, int32_t* sum) {
   V amax = vzero();
-  for (int p = 0; p < d; p += kLanes)
-    amax = vmax(amax, vabs(vload_n(x + p, d - p < kLanes ? d - p : kLanes)));
-  const float m = vreduce_max(amax);
+  __mmask16 nan = 0;
+  for (int p = 0; p < d; p += kLanes) {
+    const V a = vabs(vload_n(x + p, d - p < kLanes ? d - p : kLanes));
+    nan |= _mm512_cmp_ps_mask(a, a, _CMP_UNORD_Q);
+    amax = vmax(amax, a);
+  }
+  // max_ps drops NaNs; the scale must carry one, as qs8_row_scale's does.
+  const float m = nan ? __builtin_nanf("") : vreduce_max(amax);
   const float inv = m > 0.0f ? 127.0f / m : 0.0f;
   const V vi = vset1(inv);
   __m512i acc = _mm512_setzero_si512();

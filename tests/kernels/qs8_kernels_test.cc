@@ -254,6 +254,48 @@ TEST(QAttention, QuantisationRoundsToNearestEvenWithinTheRowScale) {
   qs8_fake_quantize_rows(1, 1, 5, x, 5, y.data());
   EXPECT_FLOAT_EQ(y[3], 3.0f);
   EXPECT_FLOAT_EQ(y[1], 64.0f * scale);
+  // A NaN or an infinity anywhere in the row: the scale, and so every value
+  // of the row, is NaN or infinite -- garbage stays visible, never plausible.
+  const float bad[3] = {1.0f, std::numeric_limits<float>::quiet_NaN(), 2.0f};
+  EXPECT_TRUE(std::isnan(qs8_row_scale(bad, 3, &inv)));
+  EXPECT_EQ(qs8_round(std::numeric_limits<float>::quiet_NaN(), 1.0f), 0);
+  qs8_fake_quantize_rows(1, 1, 3, bad, 3, y.data());
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(std::isnan(y[i])) << i;
+  const float big[2] = {1.0f, std::numeric_limits<float>::infinity()};
+  qs8_fake_quantize_rows(1, 1, 2, big, 2, y.data());
+  for (int i = 0; i < 2; ++i) EXPECT_FALSE(std::isfinite(y[i])) << i;
+}
+
+// A NaN in one query row: the other rows' outputs are untouched (equal to the
+// reference's) and finite. The poisoned row itself is not asserted: like the
+// fp32 fused kernel, the weights' lower clamp turns a NaN score into a
+// negligible weight (the reference gives NaN); in the network the NaN also
+// travels the residual path, and the pose check flags it there.
+TEST_P(QKernels, AttentionScoresInt8NaNRowStaysInItsRow) {
+  if (!ks_->attn_block) GTEST_SKIP() << GetParam().name << " has no int8-score attention";
+  const AttentionShape s{9, 40, 2, 32};
+  const int e = 64;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<float> q(size_t(9) * e), k(size_t(40) * e), v(size_t(40) * e);
+  for (float& x : q) x = u(rng);
+  for (float& x : k) x = u(rng);
+  for (float& x : v) x = u(rng);
+  q[size_t(4) * e + 3] = std::numeric_limits<float>::quiet_NaN();  // row 4, head 0
+  std::vector<float> got(q.size(), -3.0f), want(q.size()), rs(qs8_attention__ref_scratch(s));
+  qs8_attention__ref(s, q.data(), k.data(), v.data(), 0.18f, want.data(), rs.data());
+  ASSERT_TRUE(q8_attention(*ks_, s, q, k, v, 0.18f, &got));
+  for (int i = 0; i < 9; ++i) {
+    for (int c = 0; c < e; ++c) {
+      const size_t at = size_t(i) * e + c;
+      if (i == 4 && c < 32) {
+        EXPECT_TRUE(std::isnan(want[at])) << "reference row 4 col " << c;
+        continue;
+      }
+      ASSERT_TRUE(std::isfinite(got[at])) << "row " << i << " col " << c;
+      ASSERT_NEAR(got[at], want[at], 2e-5 * (1.0 + std::fabs(want[at]))) << i << " " << c;
+    }
+  }
 }
 
 TEST_P(QKernels, AttentionScoresInt8OnOddShapes) {
