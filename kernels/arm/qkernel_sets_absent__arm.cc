@@ -1,4 +1,5 @@
-// The int8 tables an aarch64 build does not contain.
+// The int8 and bf16 tables an aarch64 build does not contain.
+#include "kernels/common/bf16_attention.h"
 #include "kernels/common/qkernel_set.h"
 
 namespace aprt::kernels {
@@ -6,6 +7,9 @@ const QKernelSet* qkernel_set_avx512vnni() {
   return nullptr;
 }
 const QKernelSet* qkernel_set_avx2() {
+  return nullptr;
+}
+const Bf16AttentionKernels* bf16_attention_avx512bf16() {
   return nullptr;
 }
 }  // namespace aprt::kernels

@@ -36,6 +36,7 @@ CpuFeatures detect() {
   f.avx2_fma = ymm_state && avx2 && fma;
   f.avx512 = f.avx2_fma && zmm_state && avx512f && avx512dq && avx512bw && avx512vl;
   f.avx512_vnni = f.avx512 && (c & (1u << 11));
+  if (f.avx512 && __get_cpuid_count(7, 1, &a, &b, &c, &d)) f.avx512_bf16 = a & (1u << 5);
 #elif defined(__aarch64__)
   const unsigned long hw = getauxval(AT_HWCAP);
   f.neon = hw & HWCAP_ASIMD;

@@ -7,8 +7,9 @@ struct CpuFeatures {
   bool avx2_fma = false;  // AVX2 + FMA3, OS saves YMM state
   bool avx512 = false;    // AVX-512 F/DQ/BW/VL, OS saves ZMM and opmask state
   bool avx512_vnni = false;
-  bool neon = false;      // aarch64 Advanced SIMD
-  bool neon_dot = false;  // SDOT/UDOT (FEAT_DotProd)
+  bool avx512_bf16 = false;  // vdpbf16ps / vcvtneps2bf16 (Zen 4, Cooper Lake, Sapphire Rapids)
+  bool neon = false;         // aarch64 Advanced SIMD
+  bool neon_dot = false;     // SDOT/UDOT (FEAT_DotProd)
 };
 
 const CpuFeatures& cpu_features();

@@ -8,9 +8,11 @@
 // K and V are first packed per head (attn_pack_kv): K^T so that keys are the
 // vector dimension of the scoring loop, both contiguous per key block.
 // Where the raw scores come from is a policy (the QK template argument): fp32
-// dot products over packed K^T (AttnF32QK, below), or int8 ones (VNNI,
-// kernels/x86/qs8_attention_8x2v__avx512vnni.cc); the softmax and P V are the
-// same code for both.
+// dot products over packed K^T (AttnF32QK, below), int8 ones (VNNI,
+// kernels/x86/qs8_attention_8x2v__avx512vnni.cc) or bf16 ones
+// (kernels/x86/bf16_attention_8x2v__avx512bf16.cc); so is P V (the PV
+// argument: AttnF32PV below, or the bf16 kernel's). The online softmax is the
+// same code for all.
 // Included inside an ISA namespace (after vmath.inl).
 
 constexpr int kAttnKB = 128;  // keys per softmax block
@@ -157,9 +159,11 @@ static inline void attn_score_exp(const QK& qk, int n, V vc, const float* mrow, 
       // Clamped below even where vscale2 would give 0 by itself (AVX-512):
       // unclamped, far-off keys give denormal weights, and the full 224 model
       // measured ~25 % slower per frame that way. Above, 2^126 or +inf fails
-      // the sum check.
-      V x = vmax(vfmadd(acc[r][t], vc, neg_m), vset1(-125.0f));
-      if constexpr (!kExp2SaturatesHigh) x = vmin(x, vset1(126.0f));
+      // the sum check. The score is the second operand: x86's max and min
+      // return it when it is NaN, so a NaN score stays a NaN weight (its
+      // row's output NaN, as the reference's) instead of becoming 2^-125.
+      V x = vmax(vset1(-125.0f), vfmadd(acc[r][t], vc, neg_m));
+      if constexpr (!kExp2SaturatesHigh) x = vmin(vset1(126.0f), x);
       const V e = vexp2_bounded(x);
       vstore(sbuf + r * kAttnKB + t * kLanes, e);
       if constexpr (kFull) bsum[r] = vadd(bsum[r], e);
@@ -229,10 +233,17 @@ static inline bool attn_weights_lazy(bool first, int kb, const QK& qk, V vc, flo
 }
 
 // obuf rows (R x DV vectors) = alpha_r * obuf + P V over the block's kb
-// keys, P the weights in sbuf; alpha null: no rescaling.
+// keys, P the weights in sbuf; alpha null: no rescaling. V rows of width d
+// (DV vectors, the last dcnt[DV - 1] lanes wide) at stride ldv.
 template <int R, int DV>
-static inline void attn_pv(int kb, const float* vh, size_t ldv, const int* dcnt, const float* sbuf,
+static inline void attn_pv(int kb, const float* vh, size_t ldv, int d, const float* sbuf,
                            const float* alpha, float* obuf) {
+  int dcnt[DV];
+#pragma GCC unroll 4
+  for (int t = 0; t < DV; ++t) {
+    const int left = d - t * kLanes;
+    dcnt[t] = left < 0 ? 0 : (left > kLanes ? kLanes : left);
+  }
   V oacc[R][DV];
 #pragma GCC unroll 8
   for (int r = 0; r < R; ++r) {
@@ -275,6 +286,19 @@ static inline void attn_pv(int kb, const float* vh, size_t ldv, const int* dcnt,
   }
 }
 
+// The fp32 P V: one head's V packed by attn_pack_v ([lk_pad][d]). block(j0)
+// moves to the key block at j0; pv<R, DV> accumulates a block's weights
+// (attn_pv). The bf16 kernel has its own (x86/bf16_attention_8x2v__avx512bf16.cc).
+struct AttnF32PV {
+  const float* v;
+  int d;
+  AttnF32PV block(int j0) const { return {v + size_t(j0) * d, d}; }
+  template <int R, int DV>
+  void pv(int kb, const float* sbuf, const float* alpha, float* obuf) const {
+    attn_pv<R, DV>(kb, v, size_t(d), d, sbuf, alpha, obuf);
+  }
+};
+
 // One group of R query rows against one key block [j0, j0 + kb): scores,
 // online-softmax update, and P V accumulated into obuf (rows of DV vectors);
 // lrow holds each row's lane sums.
@@ -282,13 +306,12 @@ static inline void attn_pv(int kb, const float* vh, size_t ldv, const int* dcnt,
 // 2^(vc s - m) with m the running maximum of vc s (kept in mrow); the raw
 // scores' maximum is taken in registers while they are stored, and scaling
 // and subtracting are one FMA in the exponent pass.
-template <int R, int SV, int DV, class QK>
-static inline void attn_group(bool first, int kb, const QK& qk, const float* vh, size_t ldv, V vc,
-                              float c, const int* dcnt, float* sbuf, float* obuf, float* mrow,
-                              float* lrow) {
+template <int R, int SV, int DV, class QK, class PV>
+static inline void attn_group(bool first, int kb, const QK& qk, const PV& pv, V vc, float c,
+                              float* sbuf, float* obuf, float* mrow, float* lrow) {
   static_assert(kAttnKB % (SV * kLanes) == 0, "key block must hold whole scoring sub-blocks");
   if (attn_weights_lazy<R, SV>(first, kb, qk, vc, sbuf, mrow, lrow)) {
-    attn_pv<R, DV>(kb, vh, ldv, dcnt, sbuf, nullptr, obuf);
+    pv.template pv<R, DV>(kb, sbuf, nullptr, obuf);
     return;
   }
   V mx[R];
@@ -330,14 +353,14 @@ static inline void attn_group(bool first, int kb, const QK& qk, const float* vh,
     }
     vstore(lrow + r * kLanes, vfmadd(vload(lrow + r * kLanes), vset1(diff[r]), sum));
   }
-  attn_pv<R, DV>(kb, vh, ldv, dcnt, sbuf, diff, obuf);
+  pv.template pv<R, DV>(kb, sbuf, diff, obuf);
 }
 
 // Query rows [q0, q0 + rows) of head h (rows <= kAttnChunk), their scores
 // from qk (positioned at row q0 of head h, key 0): key blocks outer, row
 // groups of R inner.
-template <int R, int SV, int DV, class QK>
-static void attn_chunk(int rows, int kv_len, int d, const QK& qk, const float* vp_h, float scale,
+template <int R, int SV, int DV, class QK, class PV>
+static void attn_chunk(int rows, int kv_len, int d, const QK& qk, const PV& pv, float scale,
                        float* o, size_t ldo, int h, int q0, float* scratch) {
   float* sbuf = scratch;                          // [R][kAttnKB]
   float* obuf = scratch + R * kAttnKB;            // [rows][DV * kLanes]
@@ -359,20 +382,19 @@ static void attn_chunk(int rows, int kv_len, int d, const QK& qk, const float* v
   for (int j0 = 0; j0 < kv_len; j0 += kAttnKB) {
     const int kb = kv_len - j0 < kAttnKB ? kv_len - j0 : kAttnKB;
     const QK qb = qk.block(j0);  // block j0 / kAttnKB
-    const float* vh = vp_h + size_t(j0) * d;
-    const size_t ldv = size_t(d);
+    const PV pb = pv.block(j0);
     int g = 0;
     for (; g + R <= rows; g += R) {
-      attn_group<R, SV, DV>(j0 == 0, kb, qb.rows(g), vh, ldv, vc, c, dcnt, sbuf,
-                            obuf + g * DV * kLanes, mrow + g, lrow + g * kLanes);
+      attn_group<R, SV, DV>(j0 == 0, kb, qb.rows(g), pb, vc, c, sbuf, obuf + g * DV * kLanes,
+                            mrow + g, lrow + g * kLanes);
     }
     const int left = rows - g;
-#define APRT_ATTN_TAIL(RR)                                                         \
-  case RR:                                                                         \
-    if constexpr (R > RR) {                                                        \
-      attn_group<RR, SV, DV>(j0 == 0, kb, qb.rows(g), vh, ldv, vc, c, dcnt, sbuf,  \
-                             obuf + g * DV * kLanes, mrow + g, lrow + g * kLanes); \
-    }                                                                              \
+#define APRT_ATTN_TAIL(RR)                                                                     \
+  case RR:                                                                                     \
+    if constexpr (R > RR) {                                                                    \
+      attn_group<RR, SV, DV>(j0 == 0, kb, qb.rows(g), pb, vc, c, sbuf, obuf + g * DV * kLanes, \
+                             mrow + g, lrow + g * kLanes);                                     \
+    }                                                                                          \
     break;
     switch (left) {
       APRT_ATTN_TAIL(1)
@@ -397,16 +419,15 @@ static void attn_chunk(int rows, int kv_len, int d, const QK& qk, const float* v
 }
 
 // Query rows [q0, q0 + rows) of head h, rows <= kAttnChunk, their scores
-// from qk (positioned as attn_chunk says), V packed by attn_pack_v. Returns
+// from qk (positioned as attn_chunk says), P V by pv (at head h, key 0). Returns
 // false if the head width needs more than 8 vectors (the caller then uses the
 // reference kernel).
-template <int R, int SV, class QK>
-static bool attn_block_qk(int rows, int kv_len, int d, const QK& qk, const float* vp, int lk_pad,
-                          float scale, float* o, size_t ldo, int h, int q0, float* scratch) {
+template <int R, int SV, class QK, class PV>
+static bool attn_block_qk(int rows, int kv_len, int d, const QK& qk, const PV& pv, float scale,
+                          float* o, size_t ldo, int h, int q0, float* scratch) {
   static_assert(R <= 8, "row groups are dispatched up to 8");
-  const float* vp_h = vp + size_t(h) * d * lk_pad;
-#define APRT_ATTN_DV(DVV)                                                           \
-  attn_chunk<R, SV, DVV>(rows, kv_len, d, qk, vp_h, scale, o, ldo, h, q0, scratch); \
+#define APRT_ATTN_DV(DVV)                                                         \
+  attn_chunk<R, SV, DVV>(rows, kv_len, d, qk, pv, scale, o, ldo, h, q0, scratch); \
   return true;
   switch ((d + kLanes - 1) / kLanes) {
     case 1: APRT_ATTN_DV(1)
@@ -429,5 +450,6 @@ static bool attn_block(int rows, int kv_len, int d, const float* q, size_t ldq, 
                        const float* vp, int lk_pad, float scale, float* o, size_t ldo, int h,
                        int q0, float* scratch) {
   const AttnF32QK qk{q + size_t(q0) * ldq + size_t(h) * d, ldq, kt + size_t(h) * d * lk_pad, d};
-  return attn_block_qk<R, SV>(rows, kv_len, d, qk, vp, lk_pad, scale, o, ldo, h, q0, scratch);
+  const AttnF32PV pv{vp + size_t(h) * d * lk_pad, d};
+  return attn_block_qk<R, SV>(rows, kv_len, d, qk, pv, scale, o, ldo, h, q0, scratch);
 }

@@ -64,9 +64,10 @@ static inline V vexp2_bounded(V x) {
 
 // 2^x for x <= 0 (a softmax argument once the row maximum is subtracted):
 // clamped below at -125, so a -inf argument (a padded key) gives 2^-125, not
-// NaN, and 2^-125 is below the rounding of any row sum it joins.
+// NaN, and 2^-125 is below the rounding of any row sum it joins. A NaN stays
+// NaN (x is max's second operand: x86 returns it when NaN; NEON propagates).
 static inline V vexp2_nonpos(V x) {
-  return vexp2_bounded(vmax(x, vset1(-125.0f)));
+  return vexp2_bounded(vmax(vset1(-125.0f), x));
 }
 
 // 1 / (1 + e^-x) with e^-x = 2^(-x log2 e), clamped to [2^-125, 2^126]: for
@@ -101,7 +102,9 @@ static inline V verf(V x) {
 static inline V vact(V x, int act) {
   switch (act) {
     case 1: return vmul(x, vsigmoid(x));
-    case 2: return vmul(vmul(x, vset1(0.5f)), vadd(vset1(1.0f), verf(vmul(x, vset1(0.70710678118654752f)))));
+    case 2:
+      return vmul(vmul(x, vset1(0.5f)),
+                  vadd(vset1(1.0f), verf(vmul(x, vset1(0.70710678118654752f)))));
     case 3: return vsigmoid(x);
     case 4: return vmax(x, vzero());
     default: return x;

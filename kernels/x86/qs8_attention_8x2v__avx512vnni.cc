@@ -157,7 +157,8 @@ static bool attn_q8_block(int rows, int kv_len, int d, const float* q, size_t ld
                     sk,
                     reinterpret_cast<const int32_t*>(sk + lk_pad),
                     d};
-  return attn_block_qk<8, 2>(rows, kv_len, d, qk, vp, lk_pad, scale, o, ldo, h, q0, scratch);
+  const AttnF32PV pv{vp + size_t(h) * d * lk_pad, d};
+  return attn_block_qk<8, 2>(rows, kv_len, d, qk, pv, scale, o, ldo, h, q0, scratch);
 }
 }  // namespace avx512vnni
 

@@ -180,9 +180,11 @@ Expected<std::unique_ptr<Engine>> Engine::build(const uint8_t* data, size_t size
                 format::modality_name(format::Modality(options.expect_modality)));
   }
   const kernels::QKernelSet* qks = select_qkernels(e->ks_);
+  const kernels::Bf16AttentionKernels* bks = select_bf16_attention(e->ks_);
   for (OpNode& n : e->nodes_) {
     n.ks = e->ks_;
     n.qks = qks;
+    n.bks = bks;
     n.threads = options.threads;
   }
   if (Status s = e->prepare_ops(); !s) return s.error();

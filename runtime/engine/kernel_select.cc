@@ -53,6 +53,12 @@ const kernels::QKernelSet* select_qkernels(const kernels::KernelSet* ks) {
   return nullptr;
 }
 
+const kernels::Bf16AttentionKernels* select_bf16_attention(const kernels::KernelSet* ks) {
+  if (!ks || std::strcmp(ks->isa, "avx512") != 0 || !kernels::cpu_features().avx512_bf16)
+    return nullptr;
+  return kernels::bf16_attention_avx512bf16();
+}
+
 const char* kernel_set_name(const kernels::KernelSet* ks) {
   return ks ? ks->isa : "ref";
 }

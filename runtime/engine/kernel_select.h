@@ -1,6 +1,7 @@
 // Chooses the kernel table once, at load, from what the CPU reports.
 #pragma once
 
+#include "kernels/common/bf16_attention.h"
 #include "kernels/common/kernel_set.h"
 #include "kernels/common/qkernel_set.h"
 #include "runtime/common/expected.h"
@@ -19,6 +20,11 @@ Expected<const kernels::KernelSet*> select_kernels(const char* isa);
 // "avx2", NEON dotprod with "neon" on a CPU with dotprod (else plain NEON);
 // null (the int8 reference) with the reference kernels.
 const kernels::QKernelSet* select_qkernels(const kernels::KernelSet* ks);
+
+// The bf16 attention kernels that go with `ks`: AVX-512 BF16 with "avx512"
+// on a CPU that has it; null otherwise (the op then rounds Q, K and V to bf16
+// for ks's fp32 kernel, or runs the bf16 reference with the reference kernels).
+const kernels::Bf16AttentionKernels* select_bf16_attention(const kernels::KernelSet* ks);
 
 // The name of what select_kernels(isa) picks ("ref" for the reference).
 const char* kernel_set_name(const kernels::KernelSet* ks);

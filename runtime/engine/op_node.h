@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "kernels/common/bf16_attention.h"
 #include "kernels/common/kernel_set.h"
 #include "kernels/common/qkernel_set.h"
 #include "runtime/common/expected.h"
@@ -53,6 +54,7 @@ struct OpNode {
   // and the thread count the op may split its work for.
   const kernels::KernelSet* ks = nullptr;
   const kernels::QKernelSet* qks = nullptr;  // the int8 kernels that go with ks (null: reference)
+  const kernels::Bf16AttentionKernels* bks = nullptr;  // bf16 attention with ks (null: none)
   int threads = 1;
   // Declared by prepare():
   size_t scratch_floats = 0;             // shared by all of the op's tasks

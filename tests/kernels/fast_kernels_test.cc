@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -320,6 +321,33 @@ TEST_P(FastKernels, FusedAttentionScoreJumpsBetweenKeyBlocks) {
                                 : kind == 1 ? "falling"
                                             : "negative") +
                         " d=" + std::to_string(d) + " lk=" + std::to_string(lk));
+  }
+}
+
+// A NaN in one query row (head 0) or one key row (head 1): the query's row
+// of head 0 is NaN and every row of head 1 (each weighs the NaN key), as in
+// the reference; the rest equals the reference's. The weights' clamp keeps a
+// NaN score NaN on every ISA (kernels/simd/attention_impl.inl).
+TEST_P(FastKernels, FusedAttentionKeepsNaNInTheRowsItReaches) {
+  const AttentionShape s{11, 150, 2, 32};
+  const int e = 64;
+  auto q = rnd(size_t(11) * e, 2.0f), k = rnd(size_t(150) * e, 2.0f), v = rnd(size_t(150) * e);
+  q[size_t(4) * e + 3] = std::numeric_limits<float>::quiet_NaN();         // query 4, head 0
+  k[size_t(140) * e + 32 + 5] = std::numeric_limits<float>::quiet_NaN();  // key 140, head 1
+  std::vector<float> want(q.size()), got(q.size(), -3.0f), rs(f32_attention__ref_scratch(s));
+  f32_attention__ref(s, q.data(), k.data(), v.data(), 0.18f, want.data(), rs.data());
+  ASSERT_TRUE(fast_attention(*ks_, s, q, k, v, 0.18f, &got));
+  for (int i = 0; i < 11; ++i) {
+    for (int c = 0; c < e; ++c) {
+      const size_t at = size_t(i) * e + c;
+      const bool poisoned = c >= 32 || i == 4;
+      ASSERT_EQ(std::isnan(want[at]), poisoned) << "reference row " << i << " col " << c;
+      if (poisoned) {
+        EXPECT_TRUE(std::isnan(got[at])) << "row " << i << " col " << c;
+      } else {
+        ASSERT_NEAR(got[at], want[at], 2e-5 * (1.0 + std::fabs(want[at]))) << i << " " << c;
+      }
+    }
   }
 }
 

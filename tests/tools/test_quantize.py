@@ -135,6 +135,32 @@ class Quantize(unittest.TestCase):
         _, more = quantize_model(self.fp32, self.calib, backbone=True)
         self.assertGreater(len(more.ops), len(default.ops))
 
+    def test_attention_precision_int8_or_bf16(self):
+        for kw, code, key in ((dict(int8_attention=True), 1, "int8_attention"),
+                              (dict(bf16_attention=True), 2, "bf16_attention")):
+            blob, report = quantize_model(self.fp32, self.calib, **kw)
+            eg, meta = read(blob)
+            att = [op for op in eg.ops if op.code == spec.OP_ATTENTION]
+            self.assertGreater(len(att), 0)
+            self.assertEqual({op.params.get("scores") for op in att}, {code})
+            self.assertEqual(json.loads(meta["quantization"])[key], [op.name for op in att])
+        self.refused(self.calib, "not both", int8_attention=True, bf16_attention=True)
+
+    def test_bf16_rounding_is_the_engines(self):
+        x = np.array([1.0, 1 + 2.0 ** -8, 1 + 3 * 2.0 ** -8, -2.5, 3.4e38, 1e-39, -1e-39,
+                      np.inf, np.nan], np.float32)
+        y = engine_ir.bf16_round(x)
+        np.testing.assert_array_equal(y[:4], np.array([1.0, 1.0, 1 + 2.0 ** -6, -2.5],
+                                                      np.float32))
+        self.assertEqual(y[4], np.inf)  # beyond the largest bf16
+        self.assertEqual(y[5], 0.0)
+        self.assertTrue(np.signbit(y[6]) and y[6] == 0.0)  # denormals to a signed zero
+        self.assertEqual(y[7], np.inf)
+        self.assertTrue(np.isnan(y[8]))
+        r = np.random.default_rng(1).standard_normal(1000).astype(np.float32)
+        self.assertTrue((np.abs(engine_ir.bf16_round(r) - r) <= np.abs(r) * 2.0 ** -8).all())
+        self.assertTrue(((engine_ir.bf16_round(r).view(np.uint32) & 0xFFFF) == 0).all())
+
     def test_ranges_and_weights(self):
         o = Observed()
         o.add(np.concatenate([np.linspace(-1, 3, 10001), [50.0]]), np.random.default_rng(0))

@@ -245,8 +245,8 @@ TEST(ModelFile, EngineRefusesShapesInconsistentWithOps) {
       test::make_small_model([](ModelBuilder& m) { m.set_param(m.op_index("attn"), 0, 3); });
   expect_load_error(heads, Errc::kBadOp, "3 heads do not divide the width 16");
   auto scores =
-      test::make_small_model([](ModelBuilder& m) { m.set_param(m.op_index("attn"), 2, 2); });
-  expect_load_error(scores, Errc::kBadOp, "scores precision 2 unknown (0 fp32, 1 int8)");
+      test::make_small_model([](ModelBuilder& m) { m.set_param(m.op_index("attn"), 2, 3); });
+  expect_load_error(scores, Errc::kBadOp, "precision 3 unknown (0 fp32, 1 int8 scores, 2 bf16)");
   auto pad = test::make_small_model([](ModelBuilder& m) { m.set_param(m.op_index("stem"), 2, 7); });
   expect_load_error(pad, Errc::kBadOp, "padding");
   auto eps = test::make_small_model(

@@ -55,7 +55,8 @@ def cmd_golden(a):
 def cmd_golden_int8(a):
     from .golden import make_golden_int8
 
-    m = make_golden_int8(a.source, a.out, backbone=a.backbone, int8_attention=a.int8_attention)
+    m = make_golden_int8(a.source, a.out, backbone=a.backbone, int8_attention=a.int8_attention,
+                         bf16_attention=a.bf16_attention)
     print(f"golden-int8: {a.source} -> {a.out} ({m['ops']} int8 ops, {m['frames']} frames)")
 
 
@@ -113,7 +114,8 @@ def cmd_quantize(a):
                                       percentile=a.percentile, frames=a.frames,
                                       fp32_ops=a.fp32_ops, backbone=a.backbone,
                                       sensitivity=a.sensitivity,
-                                      int8_attention=a.int8_attention)
+                                      int8_attention=a.int8_attention,
+                                      bf16_attention=a.bf16_attention)
     except (CalibrationError, ModelBinError, OSError) as e:
         print(f"quantize: {a.model}: {e}", file=sys.stderr)
         sys.exit(2)
@@ -170,7 +172,7 @@ def cmd_train(a):
     if a.int8:  # calibrated on the (first) training sequence itself (frames spread over it)
         a.model, a.calibration, a.output = f"{a.out}/model.aprt", a.data[0], f"{a.out}/model_int8.aprt"
         a.method, a.percentile, a.frames, a.fp32_ops = "percentile", 99.99, 64, None
-        a.backbone = a.sensitivity = a.verbose = a.int8_attention = False
+        a.backbone = a.sensitivity = a.verbose = a.int8_attention = a.bf16_attention = False
         cmd_quantize(a)
 
 
@@ -229,7 +231,9 @@ def main(argv=None):
     gi.add_argument("source", help="folder written by golden --convert")
     gi.add_argument("--out", required=True)
     gi.add_argument("--backbone", action="store_true", help="also the backbone (depthwise too)")
-    gi.add_argument("--int8-attention", action="store_true", help="attention scores int8 too")
+    gia = gi.add_mutually_exclusive_group()
+    gia.add_argument("--int8-attention", action="store_true", help="attention scores int8 too")
+    gia.add_argument("--bf16-attention", action="store_true", help="attention in bf16")
     gi.set_defaults(fn=cmd_golden_int8)
 
     e = sub.add_parser("export", help="export the reference model (optionally a checkpoint)")
@@ -264,9 +268,13 @@ def main(argv=None):
     q.add_argument("--fp32-ops", help="regular expression: ops whose name matches stay fp32")
     q.add_argument("--backbone", action="store_true",
                    help="also the backbone's 1x1 convolutions (faster, less accurate)")
-    q.add_argument("--int8-attention", action="store_true",
-                   help="attention scores Q K^T in int8 too (per row and head; softmax and "
-                        "P V stay fp32)")
+    qa = q.add_mutually_exclusive_group()
+    qa.add_argument("--int8-attention", action="store_true",
+                    help="attention scores Q K^T in int8 too (per row and head; softmax and "
+                         "P V stay fp32)")
+    qa.add_argument("--bf16-attention", action="store_true",
+                    help="attention in bf16: Q, K, V and the softmax weights rounded to bf16, "
+                         "products on AVX-512 BF16 where the CPU has it (softmax fp32)")
     q.add_argument("--sensitivity", action="store_true",
                    help="also measure each op alone in int8 (which ops cost accuracy)")
     q.add_argument("-v", "--verbose", action="store_true", help="print each int8 op's range")

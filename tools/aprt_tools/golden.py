@@ -63,7 +63,8 @@ def make_golden(cfg: AprConfig, out_dir: str, *, seed: int = 1, opset: int = 13,
 
 
 def make_golden_int8(src_dir: str, out_dir: str, method: str = "percentile",
-                     backbone: bool = False, int8_attention: bool = False) -> dict:
+                     backbone: bool = False, int8_attention: bool = False,
+                     bf16_attention: bool = False) -> dict:
     """Golden data for the int8 path: quantises `src_dir`/model.aprt (calibrated
     on the golden inputs) and writes the int8 graph's outputs as computed by the
     converter's statement of the runtime's int8 arithmetic (engine_ir), next to
@@ -85,7 +86,7 @@ def make_golden_int8(src_dir: str, out_dir: str, method: str = "percentile",
     calib = os.path.join(out_dir, "calibration.npy")
     np.save(calib, np.concatenate(xs).astype(np.float32))
     blob, report = quantize_model(fp32, calib, method=method, frames=len(xs), backbone=backbone,
-                                  int8_attention=int8_attention)
+                                  int8_attention=int8_attention, bf16_attention=bf16_attention)
     with open(os.path.join(out_dir, "model.aprt"), "wb") as f:
         f.write(blob)
     eg, _ = read(blob)

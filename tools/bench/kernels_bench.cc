@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "kernels/common/bf16_attention.h"
 #include "kernels/common/cpu_features.h"
 #include "kernels/common/kernel_set.h"
 #include "kernels/common/lidar_fast.h"
@@ -246,6 +247,37 @@ void BM_QAttention(benchmark::State& state) {
   state.SetLabel(qs->isa);
 }
 
+// The same attention in bf16 (kernels/common/bf16_attention.h): Q, K, V and
+// the weights rounded to bf16, vdpbf16ps for both products; "GFLOP/s" again
+// counts the fp32 attention's flops against the fp32 FMA peak.
+void BM_Bf16Attention(benchmark::State& state) {
+  const Bf16AttentionKernels* bk = bf16_attention_avx512bf16();
+  if (!bk || !cpu_features().avx512_bf16 || std::string(g_ks->isa) != "avx512") {
+    state.SkipWithError("no bf16 attention for this CPU / ISA");
+    return;
+  }
+  const int l = int(state.range(0)), heads = int(state.range(1)), d = int(state.range(2));
+  const int e = heads * d;
+  const auto q = rnd(size_t(l) * e), k = rnd(size_t(l) * e), v = rnd(size_t(l) * e);
+  const int lk_pad = (l + bk->key_block - 1) / bk->key_block * bk->key_block;
+  std::vector<uint16_t> kv(bk->kv_bytes(heads, lk_pad, d) / 2);
+  Buf o(size_t(l) * e), scratch(bk->scratch(d));
+  for (auto _ : state) {
+    for (int h = 0; h < heads; ++h)
+      bk->pack_kv(l, lk_pad, d, k.data(), size_t(e), v.data(), size_t(e), h, kv.data());
+    for (int h = 0; h < heads; ++h) {
+      for (int q0 = 0; q0 < l; q0 += bk->max_rows) {
+        const int rows = l - q0 < bk->max_rows ? l - q0 : bk->max_rows;
+        bk->block(rows, l, d, q.data(), size_t(e), kv.data(), lk_pad, 0.17f, o.data(), size_t(e), h,
+                  q0, scratch.data());
+      }
+    }
+    benchmark::DoNotOptimize(o.data());
+  }
+  add_peak_counter(state, 4.0 * l * l * e);
+  state.SetLabel(bk->isa);
+}
+
 void BM_Depthwise(benchmark::State& state) {
   const int hw = int(state.range(0)), c = int(state.range(1)), kk = int(state.range(2)),
             s = int(state.range(3));
@@ -328,6 +360,7 @@ BENCHMARK(BM_Attention)
     ->Args({196, 8, 32})
     ->Args({64, 8, 32});
 BENCHMARK(BM_QAttention)->Args({784, 8, 32})->Args({196, 8, 32});
+BENCHMARK(BM_Bf16Attention)->Args({784, 8, 32})->Args({196, 8, 32});
 // LAYERNORM over rows x width (the transformers' 784 / 196 tokens of 256).
 void BM_LayerNorm(benchmark::State& state) {
   const int rows = int(state.range(0)), n = int(state.range(1));

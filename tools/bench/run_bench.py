@@ -63,11 +63,13 @@ def ort_model(s, d):
     return os.path.join(d, "model_portable.onnx" if s == "points" else "model.onnx")
 
 
-def ensure_int8(d, attention=False):
+def ensure_int8(d, attention=None):
     """Calibrated on demo-drive frames (camera) or on the golden inputs (BEV: any
-    input of the right shape serves a speed measurement). attention: the
-    attention scores int8 too (quantize --int8-attention)."""
-    out = os.path.join(d, "model_int8_attention.aprt" if attention else "model_int8.aprt")
+    input of the right shape serves a speed measurement). attention: "int8"
+    (scores int8 too, quantize --int8-attention), "bf16" (--bf16-attention) or
+    None (fp32 attention)."""
+    out = os.path.join(d, f"model_int8_{attention}_attention.aprt" if attention else
+                       "model_int8.aprt")
     if not os.path.exists(out):
         print(f"run_bench: quantising {d}/model.aprt", flush=True)
         env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "tools"), PYTHONWARNINGS="ignore")
@@ -81,7 +83,7 @@ def ensure_int8(d, attention=False):
             np.save(calib, np.abs(x.transpose(0, 2, 3, 1)))
         sh([PYTHON, "-m", "aprt_tools", "quantize", os.path.join(d, "model.aprt"),
             "--calibration", calib, "--frames", "4", "-o", out] +
-           (["--int8-attention"] if attention else []), env=env)
+           ([f"--{attention}-attention"] if attention else []), env=env)
     return out
 
 
@@ -125,8 +127,11 @@ def main():
     ap.add_argument("--models", default=os.path.join(ROOT, "build", "bench"))
     ap.add_argument("--markdown", help="also write the table to this file")
     ap.add_argument("--no-int8", action="store_true", help="fp32 only")
-    ap.add_argument("--int8-attention", action="store_true",
-                    help="the int8 model with int8 attention scores too (docs/int8.md)")
+    att = ap.add_mutually_exclusive_group()
+    att.add_argument("--int8-attention", action="store_const", const="int8", dest="attention",
+                     help="the int8 model with int8 attention scores too (docs/int8.md)")
+    att.add_argument("--bf16-attention", action="store_const", const="bf16", dest="attention",
+                     help="the int8 model with bf16 attention (docs/int8.md)")
     ap.add_argument("--bev", action="store_true",
                     help="also the LiDAR BEV model (256 x 256 x 2 histogram, same network)")
     ap.add_argument("--points", action="store_true",
@@ -145,7 +150,7 @@ def main():
     ours = {(s, t): [] for s in sizes for t in threads}
     int8 = {(s, t): [] for s in sizes for t in threads}
     # (int8 of the points model: not measured; its policy is the image model's)
-    int8_models = {} if a.no_int8 else {s: ensure_int8(models[s], a.int8_attention) for s in sizes
+    int8_models = {} if a.no_int8 else {s: ensure_int8(models[s], a.attention) for s in sizes
                                          if s != "points"}
     info = {}
     for r in range(a.rounds):
@@ -163,7 +168,8 @@ def main():
     head = (f"ONNX Runtime (onnxruntime-node 1.30.0, graph optimisation 'all', sequential) vs aprt, "
             f"{a.rounds} interleaved rounds x {a.runs} runs each; {cpu_name()}, "
             f"{os.cpu_count()} cores; {now}." +
-            (" int8: attention scores int8 too." if a.int8_attention and not a.no_int8 else ""))
+            ({"int8": " int8: attention scores int8 too.", "bf16": " int8: attention in bf16."}
+             .get(a.attention, "") if not a.no_int8 else ""))
     q = "" if a.no_int8 else " aprt int8 median ms | int8 p99 | ORT / int8 |"
     lines = ["| input | threads | ORT median ms | ORT p99 | aprt median ms | aprt p99 | ORT / aprt |" +
              q + " aprt kernels | allocations/frame |",

@@ -1,12 +1,16 @@
 // ATTENTION: multi-head softmax(scale Q K^T) V over row-major Q [Lq,E], K/V [Lk,E].
-// params: heads, scale (f32 bits), scores (0 fp32, 1 int8: kernels/common/qs8_attention.h)
+// params: heads, scale (f32 bits), precision (0 fp32; 1 int8 scores:
+// kernels/common/qs8_attention.h; 2 bf16: kernels/ref/bf16_attention__ref.h)
 // Fast path: K and V are packed per head into the op's scratch (K^T in key
 // blocks; tasks over heads), then (head, query chunk) tasks run the fused
 // online-softmax kernel. int8 scores: the int8 table's kernel where it has one
 // (AVX-512 VNNI), else Q and K fake-quantised into scratch and the fp32 path
 // over them -- the same scores up to the rounding of fp32 products of small
-// integers.
+// integers. bf16: the bf16 table's kernel where the CPU has one (AVX-512
+// BF16), else Q, K and V rounded to bf16 into scratch and the fp32 path over
+// them (the weights unrounded), or the bf16 reference without fast kernels.
 #include "kernels/common/qkernel_set.h"
+#include "kernels/ref/bf16_attention__ref.h"
 #include "kernels/ref/f32_attention__ref.h"
 #include "kernels/ref/qs8_attention__ref.h"
 #include "runtime/engine/ops/op_common.h"
@@ -15,7 +19,7 @@
 namespace aprt::ops {
 namespace {
 
-enum class Scores : uint8_t { kF32, kInt8Kernel, kInt8FakeQuant };
+enum class Scores : uint8_t { kF32, kInt8Kernel, kInt8FakeQuant, kBf16Kernel, kBf16Rounded };
 
 struct AttnState {
   kernels::AttentionShape shape;
@@ -23,7 +27,7 @@ struct AttnState {
   int lk_pad;
   Scores scores;
   bool fast;         // the fp32 kernels (else the reference)
-  size_t fq_floats;  // kInt8FakeQuant: Q and K fake-quantised at the scratch's start
+  size_t fq_floats;  // kInt8FakeQuant, kBf16Rounded: Q and K (and V) at the scratch's start
   Split chunks;      // query rows per task, whole row groups, at most attn_max_rows
 };
 
@@ -36,12 +40,23 @@ struct AttnTask {
   float* scratch;  // past the fake-quantised Q and K, if any
 };
 
+// What every task reads first: its data, the node, the op's state and E.
+struct TaskView {
+  const AttnTask& t;
+  const OpNode& node;
+  const AttnState& s;
+  size_t e;
+  explicit TaskView(void* data)
+      : t(*static_cast<const AttnTask*>(data)),
+        node(*t.node),
+        s(node.state_as<AttnState>()),
+        e(size_t(s.shape.heads) * s.shape.head_dim) {}
+};
+
 void pack_task(void* data, int head, int) {
-  const auto* t = static_cast<const AttnTask*>(data);
-  const auto& s = t->node->state_as<AttnState>();
-  const size_t e = size_t(s.shape.heads) * s.shape.head_dim;
-  t->node->ks->attn_pack_kv(s.shape.kv_len, s.lk_pad, s.shape.head_dim, t->k, e, t->v, e, head,
-                            t->scratch, t->scratch + e * s.lk_pad);
+  const TaskView v(data);
+  v.node.ks->attn_pack_kv(v.s.shape.kv_len, v.s.lk_pad, v.s.shape.head_dim, v.t.k, v.e, v.t.v, v.e,
+                          head, v.t.scratch, v.t.scratch + v.e * v.s.lk_pad);
 }
 
 // A (head, query chunk) task: its head, first query row and row count.
@@ -54,40 +69,69 @@ BlockRows block_rows(const AttnState& s, int task) {
 }
 
 void block_task(void* data, int task, int thread) {
-  const auto* t = static_cast<const AttnTask*>(data);
-  const OpNode& node = *t->node;
-  const auto& s = node.state_as<AttnState>();
-  const size_t e = size_t(s.shape.heads) * s.shape.head_dim;
-  const BlockRows b = block_rows(s, task);
-  (void)node.ks->attn_block(b.rows, s.shape.kv_len, s.shape.head_dim, t->q, e, t->scratch,
-                            t->scratch + e * s.lk_pad, s.lk_pad, s.scale, node.out[0]->f32(), e,
-                            b.h, b.q0, t->ctx->thread_scratch[thread]);
+  const TaskView v(data);
+  const BlockRows b = block_rows(v.s, task);
+  (void)v.node.ks->attn_block(b.rows, v.s.shape.kv_len, v.s.shape.head_dim, v.t.q, v.e, v.t.scratch,
+                              v.t.scratch + v.e * v.s.lk_pad, v.s.lk_pad, v.s.scale,
+                              v.node.out[0]->f32(), v.e, b.h, b.q0,
+                              v.t.ctx->thread_scratch[thread]);
 }
 
 // The int8 kernel's scratch: V packed (fp32, E * lk_pad floats), then K's int8 packing.
 void q8_pack_task(void* data, int head, int) {
-  const auto* t = static_cast<const AttnTask*>(data);
-  const auto& s = t->node->state_as<AttnState>();
-  const size_t e = size_t(s.shape.heads) * s.shape.head_dim;
-  t->node->qks->attn_pack_kv(s.shape.kv_len, s.lk_pad, s.shape.head_dim, t->k, e, t->v, e, head,
-                             reinterpret_cast<uint8_t*>(t->scratch + e * s.lk_pad), t->scratch);
+  const TaskView v(data);
+  v.node.qks->attn_pack_kv(v.s.shape.kv_len, v.s.lk_pad, v.s.shape.head_dim, v.t.k, v.e, v.t.v, v.e,
+                           head, reinterpret_cast<uint8_t*>(v.t.scratch + v.e * v.s.lk_pad),
+                           v.t.scratch);
 }
 
 void q8_block_task(void* data, int task, int thread) {
-  const auto* t = static_cast<const AttnTask*>(data);
-  const OpNode& node = *t->node;
-  const auto& s = node.state_as<AttnState>();
-  const size_t e = size_t(s.shape.heads) * s.shape.head_dim;
-  const BlockRows b = block_rows(s, task);
-  (void)node.qks->attn_block(b.rows, s.shape.kv_len, s.shape.head_dim, t->q, e,
-                             reinterpret_cast<const uint8_t*>(t->scratch + e * s.lk_pad),
-                             t->scratch, s.lk_pad, s.scale, node.out[0]->f32(), e, b.h, b.q0,
-                             t->ctx->thread_scratch[thread]);
+  const TaskView v(data);
+  const BlockRows b = block_rows(v.s, task);
+  (void)v.node.qks->attn_block(b.rows, v.s.shape.kv_len, v.s.shape.head_dim, v.t.q, v.e,
+                               reinterpret_cast<const uint8_t*>(v.t.scratch + v.e * v.s.lk_pad),
+                               v.t.scratch, v.s.lk_pad, v.s.scale, v.node.out[0]->f32(), v.e, b.h,
+                               b.q0, v.t.ctx->thread_scratch[thread]);
+}
+
+// The bf16 kernel's scratch: K and V of all heads packed as bf16.
+void bf16_pack_task(void* data, int head, int) {
+  const TaskView v(data);
+  v.node.bks->pack_kv(v.s.shape.kv_len, v.s.lk_pad, v.s.shape.head_dim, v.t.k, v.e, v.t.v, v.e,
+                      head, reinterpret_cast<uint16_t*>(v.t.scratch));
+}
+
+void bf16_block_task(void* data, int task, int thread) {
+  const TaskView v(data);
+  const BlockRows b = block_rows(v.s, task);
+  (void)v.node.bks->block(b.rows, v.s.shape.kv_len, v.s.shape.head_dim, v.t.q, v.e,
+                          reinterpret_cast<const uint16_t*>(v.t.scratch), v.s.lk_pad, v.s.scale,
+                          v.node.out[0]->f32(), v.e, b.h, b.q0, v.t.ctx->thread_scratch[thread]);
 }
 
 void eval_attention(const OpNode& node, const RunContext& ctx) {
   const auto& s = node.state_as<AttnState>();
   AttnTask t{&node, &ctx, node.in[0]->f32(), node.in[1]->f32(), node.in[2]->f32(), ctx.scratch};
+  if (s.scores == Scores::kBf16Kernel) {
+    parallel_for(ctx, s.shape.heads, bf16_pack_task, &t);
+    parallel_for(ctx, s.shape.heads * s.chunks.tasks, bf16_block_task, &t);
+    return;
+  }
+  if (s.scores == Scores::kBf16Rounded) {
+    if (!s.fast) {
+      kernels::bf16_attention__ref(s.shape, t.q, t.k, t.v, s.scale, node.out[0]->f32(),
+                                   ctx.scratch);
+      return;
+    }
+    const int e = s.shape.heads * s.shape.head_dim;
+    float* qb = ctx.scratch;
+    float* kb = qb + size_t(s.shape.q_len) * e;
+    float* vb = kb + size_t(s.shape.kv_len) * e;
+    kernels::bf16_round_rows(s.shape.q_len, e, t.q, size_t(e), qb);
+    kernels::bf16_round_rows(s.shape.kv_len, e, t.k, size_t(e), kb);
+    kernels::bf16_round_rows(s.shape.kv_len, e, t.v, size_t(e), vb);
+    t = {&node, &ctx, qb, kb, vb, ctx.scratch + s.fq_floats};
+  }
   if (s.scores == Scores::kInt8Kernel) {
     parallel_for(ctx, s.shape.heads, q8_pack_task, &t);
     parallel_for(ctx, s.shape.heads * s.chunks.tasks, q8_block_task, &t);
@@ -139,8 +183,8 @@ Status prepare_attention(OpNode& node) {
   APRT_OP_ENSURE(node, y->numel == q->numel && y->last_dim() == e, Errc::kShapeMismatch,
                  "output must be %zu x %d", q->rows(), e);
   const int32_t scores = node.params[2];
-  APRT_OP_ENSURE(node, scores == 0 || scores == 1, Errc::kBadOp,
-                 "scores precision %d unknown (0 fp32, 1 int8)", int(scores));
+  APRT_OP_ENSURE(node, scores >= 0 && scores <= 2, Errc::kBadOp,
+                 "precision %d unknown (0 fp32, 1 int8 scores, 2 bf16)", int(scores));
   auto& s = node.state_as<AttnState>();
   s.shape = {int(q->rows()), int(k->rows()), heads, e / heads};
   s.scale = scale;
@@ -163,8 +207,24 @@ Status prepare_attention(OpNode& node) {
     node.kernel = qks->isa;
     return ok();
   }
-  s.scores = scores == 1 ? Scores::kInt8FakeQuant : Scores::kF32;
+  const kernels::Bf16AttentionKernels* bks = node.bks;
+  if (scores == 2 && bks && d % 2 == 0 && d <= 128) {
+    s.scores = Scores::kBf16Kernel;
+    s.fast = true;
+    const int step = bks->key_block;
+    s.lk_pad = (s.shape.kv_len + step - 1) / step * step;
+    s.chunks = make_split(s.shape.q_len, bks->group_rows,
+                          (s.shape.q_len + bks->max_rows - 1) / bks->max_rows);
+    node.scratch_floats = (bks->kv_bytes(heads, s.lk_pad, d) + 3) / 4;
+    node.thread_scratch_floats = bks->scratch(d);
+    node.kernel = bks->isa;
+    return ok();
+  }
+  s.scores = scores == 1   ? Scores::kInt8FakeQuant
+             : scores == 2 ? Scores::kBf16Rounded
+                           : Scores::kF32;
   if (scores == 1) s.fq_floats = (q->rows() + k->rows()) * size_t(e);
+  if (scores == 2) s.fq_floats = (q->rows() + 2 * k->rows()) * size_t(e);
   s.fast = node.ks && (d + node.ks->lanes - 1) / node.ks->lanes <= 8;
   if (s.fast) {
     const int step = node.ks->attn_key_block;
@@ -175,6 +235,8 @@ Status prepare_attention(OpNode& node) {
     node.scratch_floats = s.fq_floats + 2 * size_t(e) * s.lk_pad;  // packed K^T and V
     node.thread_scratch_floats = node.ks->attn_scratch(d);
     node.kernel = node.ks->isa;
+  } else if (scores == 2) {
+    node.scratch_floats = kernels::bf16_attention__ref_scratch(s.shape);
   } else {
     node.scratch_floats = s.fq_floats + kernels::f32_attention__ref_scratch(s.shape);
   }

@@ -8,6 +8,10 @@
 // (y = mult[j] * acc + bias[j], mult[j] = input scale * weight scale[j]). ReLU
 // and the residual fuse into the epilogue where the order allows; GELU, SiLU
 // and sigmoid run as the fp32 activation kernel over the output afterwards.
+// Fast path: the quantisation in row tasks, then product tasks each of which
+// finishes its own tile (activation, residual) in blocks of kFinishRows rows
+// right after computing them, while they are still in cache -- the same
+// arithmetic per element as one pass over the whole output, on every thread.
 #include "kernels/common/qkernel_set.h"
 #include "kernels/ref/f32_elementwise__ref.h"
 #include "kernels/ref/qs8_gemm__ref.h"
@@ -25,6 +29,7 @@ struct QLinearState {
   float a_scale, a_inv_scale;
   int32_t a_zero;
   Split rows, panels;
+  Split qrows;  // rows of the input quantisation per task
   // Offsets in node.packed (floats): mult[N], colsum[N] (int32), packed weights.
   size_t mult_at, colsum_at, weights_at;
 };
@@ -32,6 +37,7 @@ struct QLinearState {
 struct QLinearTask {
   const OpNode* node;
   kernels::QGemmArgs args;
+  uint8_t* q;  // the quantised input (args.a), written by quantize_task
 };
 
 const float* residual_of(const OpNode& node) {
@@ -39,26 +45,33 @@ const float* residual_of(const OpNode& node) {
 }
 
 // After the product: the activation the epilogue could not fuse, then the
-// residual that must follow it. Serial: O(M N), small beside the product.
-void finish(const OpNode& node, const QLinearState& s) {
+// residual that must follow it, on the output elements [i0, i1).
+void finish(const OpNode& node, const QLinearState& s, size_t i0, size_t i1) {
   float* y = node.out[0]->f32();
-  const size_t n = node.out[0]->numel;
   if (s.act != s.fused_act) {
     if (node.ks) {
-      node.ks->activation(s.act, y, y, 0, n);
+      node.ks->activation(s.act, y, y, i0, i1);
     } else {
-      kernels::f32_activation__ref(n, s.act, y, y);
+      kernels::f32_activation__ref(i1 - i0, s.act, y + i0, y + i0);
     }
   }
   const float* r = residual_of(node);
   if (r && !s.fuse_residual) {
     if (node.ks) {
-      node.ks->add(y, r, y, 0, n);
+      node.ks->add(y, r, y, i0, i1);
     } else {
-      kernels::f32_add__ref(n, y, r, y);
+      kernels::f32_add__ref(i1 - i0, y + i0, r + i0, y + i0);
     }
   }
 }
+
+bool needs_finish(const OpNode& node, const QLinearState& s) {
+  return s.act != s.fused_act || (residual_of(node) && !s.fuse_residual);
+}
+
+// Rows a product task computes before finishing them: 128 rows of 256
+// outputs are 128 KB, in L2 when the activation reads them back.
+constexpr int kFinishRows = 128;
 
 void eval_qlinear_ref(const OpNode& node, const RunContext& ctx) {
   const auto& s = node.state_as<QLinearState>();
@@ -69,30 +82,56 @@ void eval_qlinear_ref(const OpNode& node, const RunContext& ctx) {
                            static_cast<const int8_t*>(node.in[1]->data), node.packed + s.mult_at,
                            node.in[2]->f32(), s.fuse_residual ? residual_of(node) : nullptr,
                            size_t(s.shape.n), s.fused_act, node.out[0]->f32(), size_t(s.shape.n));
-  finish(node, s);
+  finish(node, s, 0, node.out[0]->numel);
+}
+
+void quantize_task(void* data, int task, int) {
+  const auto* t = static_cast<const QLinearTask*>(data);
+  const OpNode& node = *t->node;
+  const auto& s = node.state_as<QLinearState>();
+  const size_t k = size_t(s.shape.k), r0 = size_t(s.qrows.begin(task));
+  node.qks->quantize((size_t(s.qrows.end(task)) - r0) * k, node.in[0]->f32() + r0 * k,
+                     s.a_inv_scale, s.a_zero, t->q + r0 * k);
 }
 
 void qlinear_task(void* data, int task, int) {
   const auto* t = static_cast<const QLinearTask*>(data);
-  const auto& s = t->node->state_as<QLinearState>();
+  const OpNode& node = *t->node;
+  const auto& s = node.state_as<QLinearState>();
   const int rt = task % s.rows.tasks, pt = task / s.rows.tasks;
-  t->node->qks->gemm(t->args, s.rows.begin(rt), s.rows.end(rt), s.panels.begin(pt),
-                     s.panels.end(pt));
+  const int r0 = s.rows.begin(rt), r1 = s.rows.end(rt), p0 = s.panels.begin(pt),
+            p1 = s.panels.end(pt);
+  if (!needs_finish(node, s)) {
+    node.qks->gemm(t->args, r0, r1, p0, p1);
+    return;
+  }
+  const size_t n = size_t(s.shape.n);
+  const size_t c0 = size_t(p0) * node.qks->nr;
+  const size_t c1 = size_t(p1) * node.qks->nr < n ? size_t(p1) * node.qks->nr : n;
+  for (int b0 = r0; b0 < r1; b0 += kFinishRows) {
+    const int b1 = b0 + kFinishRows < r1 ? b0 + kFinishRows : r1;
+    node.qks->gemm(t->args, b0, b1, p0, p1);
+    if (c0 == 0 && c1 == n) {
+      finish(node, s, size_t(b0) * n, size_t(b1) * n);
+    } else {
+      for (int r = b0; r < b1; ++r) finish(node, s, size_t(r) * n + c0, size_t(r) * n + c1);
+    }
+  }
 }
 
 void eval_qlinear_fast(const OpNode& node, const RunContext& ctx) {
   const auto& s = node.state_as<QLinearState>();
   auto* q = reinterpret_cast<uint8_t*>(ctx.scratch);
-  node.qks->quantize(size_t(s.shape.m) * s.shape.k, node.in[0]->f32(), s.a_inv_scale, s.a_zero, q);
   const float* packed = node.packed;
   QLinearTask t{&node,
                 {s.shape.m, s.shape.n, s.shape.k, q, size_t(s.shape.k), s.a_zero,
                  reinterpret_cast<const int8_t*>(packed + s.weights_at),
                  reinterpret_cast<const int32_t*>(packed + s.colsum_at), packed + s.mult_at,
                  node.in[2]->f32(), s.fuse_residual ? residual_of(node) : nullptr,
-                 size_t(s.shape.n), node.out[0]->f32(), size_t(s.shape.n), s.fused_act}};
+                 size_t(s.shape.n), node.out[0]->f32(), size_t(s.shape.n), s.fused_act},
+                q};
+  parallel_for(ctx, s.qrows.tasks, quantize_task, &t);
   parallel_for(ctx, s.rows.tasks * s.panels.tasks, qlinear_task, &t);
-  finish(node, s);
 }
 
 // mult[j] = input scale x weight scale[j], as one float product (the converter's
@@ -164,6 +203,9 @@ Status prepare_qlinear(OpNode& node) {
   node.pack = pack_qlinear;
   if (node.qks) {
     split_gemm(s.shape.m, n, k, node.qks->mr, node.qks->nr, node.threads, &s.rows, &s.panels);
+    // Rows in units of 16 (whole quantiser vectors of the widths that matter;
+    // any split is exact), at most one task per thread.
+    s.qrows = make_split(s.shape.m, 16, node.threads);
     node.packed_floats = s.weights_at + floats_for_bytes(kernels::qs8_pack_w_bytes(
                                             n, k, node.qks->nr, node.qks->kgroup));
     node.eval = eval_qlinear_fast;

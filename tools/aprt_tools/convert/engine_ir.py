@@ -231,12 +231,15 @@ def run_op(op: Op, get) -> list:
         q = q.reshape(-1, h, d).transpose(1, 0, 2)
         k = k.reshape(-1, h, d).transpose(1, 0, 2)
         v = v.reshape(-1, h, d).transpose(1, 0, 2)
-        if p.get("scores"):  # int8 scores: Q and K per row and head (qs8_attention.h)
+        bf16 = p.get("scores") == 2  # bf16 attention (FORMAT.md; kernels/common/bf16.h)
+        if p.get("scores") == 1:  # int8 scores: Q and K per row and head (qs8_attention.h)
             q, k = fake_quantize_rows(q), fake_quantize_rows(k)
+        elif bf16:
+            q, k, v = bf16_round(q), bf16_round(k), bf16_round(v)
         s = (q @ k.transpose(0, 2, 1)) * p["scale"]
         s = np.exp(s - s.max(axis=-1, keepdims=True))
-        s /= s.sum(axis=-1, keepdims=True)
-        y = (s @ v).transpose(1, 0, 2).reshape(-1, e)
+        total = s.sum(axis=-1, keepdims=True)  # of the unrounded weights, as the engine sums
+        y = ((bf16_round(s) if bf16 else s) @ v / total).transpose(1, 0, 2).reshape(-1, e)
     elif c == spec.OP_CROSS_ATTENTION_1Q:
         q, m, pos, wk, bk, wv, bv = ins
         h = p["heads"]
@@ -278,6 +281,18 @@ def fake_quantize_rows(x: np.ndarray) -> np.ndarray:
     inv = np.where(amax > 0, np.float32(127.0) / np.where(amax > 0, amax, 1), 0).astype(np.float32)
     q = np.rint(x * inv).astype(np.float32)
     return q * (amax / np.float32(127.0)).astype(np.float32)
+
+def bf16_round(x: np.ndarray) -> np.ndarray:
+    """To the nearest bfloat16 and back, ties to even, denormals to zero, NaN
+    kept: the rounding of kernels/common/bf16.h (and of vcvtneps2bf16)."""
+    x = np.ascontiguousarray(x, np.float32)
+    u = x.view(np.uint32).astype(np.uint64)
+    r = ((u + 0x7FFF + ((u >> 16) & 1)) >> 16 << 16).astype(np.uint32)
+    r = np.where((u & 0x7F800000) == 0, u & 0x80000000, r).astype(np.uint32)
+    y = r.view(np.float32).copy()
+    y[np.isnan(x)] = np.nan
+    return y.reshape(x.shape)
+
 
 def run(graph: EngineGraph, feeds: dict, keep_all: bool = True) -> dict:
     """Run the graph; `feeds` maps input Tensor -> array. Returns Tensor id -> value."""

@@ -278,11 +278,13 @@ class QuantReport:
     deviation_m: list = field(default_factory=list)
     deviation_deg: list = field(default_factory=list)
     sensitivity: list = field(default_factory=list)  # (op, max m, max deg) with it alone int8
-    attention: list = field(default_factory=list)  # ATTENTION ops with int8 scores
+    attention: list = field(default_factory=list)  # ATTENTION ops with int8 scores, or in bf16
+    attention_precision: str = "int8 scores"
 
     def text(self) -> str:
         dm, dd = np.asarray(self.deviation_m), np.asarray(self.deviation_deg)
-        att = f" (+ {len(self.attention)} attentions' scores)" if self.attention else ""
+        att = (f" (+ {len(self.attention)} attentions, {self.attention_precision})"
+               if self.attention else "")
         return (f"{len(self.ops)} ops int8{att}, calibrated on {self.frames} frames; "
                 f"int8 vs fp32 on those frames: position p50 {np.median(dm):.4f} / max "
                 f"{dm.max():.4f} m, orientation p50 {np.median(dd):.4f} / max {dd.max():.4f} deg")
@@ -291,8 +293,10 @@ class QuantReport:
 def quantize_model(data: bytes, calibration: str, *, method: str = "percentile",
                    percentile: float = 99.99, frames: int = 64, fp32_ops: str | None = None,
                    backbone: bool = False, sensitivity: bool = False, seed: int = 0,
-                   int8_attention: bool = False):
+                   int8_attention: bool = False, bf16_attention: bool = False):
     """fp32 model_bin bytes -> (int8 model_bin bytes, QuantReport)."""
+    if int8_attention and bf16_attention:
+        raise CalibrationError("calibration: attention int8 or bf16, not both")
     if method not in METHODS:
         raise CalibrationError(f"calibration: method {method!r} (one of {', '.join(METHODS)})")
     if not 50.0 < percentile <= 100.0:
@@ -361,12 +365,15 @@ def quantize_model(data: bytes, calibration: str, *, method: str = "percentile",
         k, n = (int(np.prod(w.shape[:-1])), w.shape[-1]) if op.code == spec.OP_DWCONV2D else \
             (w.shape[1], w.shape[0])
         report.ops.append((op.name, int(np.prod(op.inputs[0].shape[:-1])), k, n, scale, zero))
-    if int8_attention:  # Q K^T in int8 (dynamic per row and head; FORMAT.md), softmax fp32
+    if int8_attention or bf16_attention:
+        # Q K^T in int8 (dynamic per row and head; FORMAT.md), softmax and P V fp32; or
+        # Q, K, V and the weights in bf16, softmax fp32.
         keep = re.compile(fp32_ops) if fp32_ops else None
         for op in eg.ops:
             if op.code == spec.OP_ATTENTION and not (keep and keep.search(op.name)):
-                op.params["scores"] = 1
+                op.params["scores"] = 1 if int8_attention else 2
                 report.attention.append(op.name)
+        report.attention_precision = "int8 scores" if int8_attention else "bf16"
     eg.prune()
     report.deviation_m, report.deviation_deg = deviations()
     # Insertion order: what `aprt info` shows first (method, data, policy), the op list last.
@@ -377,8 +384,10 @@ def quantize_model(data: bytes, calibration: str, *, method: str = "percentile",
                                                  if backbone else
                                                  ", backbone and input projections fp32") +
                 (f", fp32 by name: {fp32_ops}" if fp32_ops else "") +
-                (", attention scores int8 (Q and K per row and head)" if int8_attention else "")),
+                (", attention scores int8 (Q and K per row and head)" if int8_attention else "") +
+                (", attention in bf16 (Q, K, V and the weights)" if bf16_attention else "")),
         scheme="u8 activations per tensor (asymmetric), s8 weights per channel (symmetric), "
                "int32 accumulation",
-        int8_ops=[r[0] for r in report.ops], int8_attention=report.attention))
+        int8_ops=[r[0] for r in report.ops],
+        **{"bf16_attention" if bf16_attention else "int8_attention": report.attention}))
     return serialise(eg, meta), report
