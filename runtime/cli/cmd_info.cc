@@ -103,6 +103,22 @@ int cmd_info(int argc, char** argv) {
     if (counts[c]) std::printf(" %s %d", format::op_name(format::OpCode(c)), counts[c]);
   }
   std::printf("\n");
+  // Which implementation each op runs on this CPU (chosen at load: the fp32,
+  // int8 and bf16 tables, or the reference), in order of first use.
+  const char* kernel_names[8] = {};
+  int kernel_ops[8] = {};
+  int kinds = 0;
+  for (size_t i = 0; i < e.op_count(); ++i) {
+    const char* k = e.op(i).kernel;
+    int at = 0;
+    while (at < kinds && std::strcmp(kernel_names[at], k) != 0) ++at;
+    if (at == kinds && kinds < 8) kernel_names[kinds++] = k;
+    if (at < kinds) ++kernel_ops[at];
+  }
+  std::printf("kernels      on this CPU:");
+  for (int i = 0; i < kinds; ++i)
+    std::printf("%s %s %d", i ? "," : "", kernel_names[i], kernel_ops[i]);
+  std::printf(" ops\n");
   std::printf("compute      %.3f G multiply-adds per frame\n", double(e.total_flops()) / 2e9);
   const MemoryReport& r = e.memory();
   size_t n_const = 0;
@@ -118,13 +134,13 @@ int cmd_info(int argc, char** argv) {
               double(r.total_bytes) / 1e6, double(r.image_bytes) / 1e6, double(r.arena_bytes) / 1e6,
               double(r.scratch_bytes) / 1e6);
   if (list_ops) {
-    std::printf("\n  #  op              MFLOP  output          name\n");
+    std::printf("\n  #  op              MFLOP  output          kernel      name\n");
     for (size_t i = 0; i < e.op_count(); ++i) {
       const OpNode& n = e.op(i);
       char shape[48];
       shape_text(*n.out[0], shape, sizeof shape);
-      std::printf("%4zu %-14s %7.2f  %-15s %s\n", i, format::op_name(n.code), double(n.flops) / 1e6,
-                  shape, n.name);
+      std::printf("%4zu %-14s %7.2f  %-15s %-11s %s\n", i, format::op_name(n.code),
+                  double(n.flops) / 1e6, shape, n.kernel, n.name);
     }
   }
   return 0;

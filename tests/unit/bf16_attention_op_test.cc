@@ -93,5 +93,26 @@ TEST(Bf16AttentionOp, RunsWithoutAllocatingAndTwoThreadsGiveTheSameBits) {
   EXPECT_EQ(scope.count(), 0u);
 }
 
+// Where the op prepares Q, K (, V) itself -- rounded to bf16, or int8 scores
+// fake-quantised -- it does so in row tasks: two threads must give one
+// thread's bits, on every ISA that takes that path here.
+TEST(Bf16AttentionOp, PreparationInRowTasksGivesOneThreadsBits) {
+  for (int precision : {1, 2}) {
+    const auto b =
+        precision == 1
+            ? test::make_small_model([](ModelBuilder& m) { m.set_param(m.op_index("attn"), 2, 1); })
+            : bf16_model();
+    for (const char* isa : {"avx2", "neon"}) {
+      auto one = load(b, isa, 1), two = load(b, isa, 2);
+      if (!one && one.error().code() == Errc::kUnsupported) continue;  // not this CPU / build
+      ASSERT_TRUE(one && two) << isa;
+      const auto a = run_once(**one);
+      const auto c = run_once(**two);
+      EXPECT_EQ(std::memcmp(a.data(), c.data(), sizeof(float) * 7), 0)
+          << isa << " precision " << precision;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace aprt

@@ -29,6 +29,7 @@ struct AttnState {
   bool fast;         // the fp32 kernels (else the reference)
   size_t fq_floats;  // kInt8FakeQuant, kBf16Rounded: Q and K (and V) at the scratch's start
   Split chunks;      // query rows per task, whole row groups, at most attn_max_rows
+  Split prep;        // kInt8FakeQuant, kBf16Rounded: rows of Q, K (, V) per preparation task
 };
 
 struct AttnTask {
@@ -109,6 +110,38 @@ void bf16_block_task(void* data, int task, int thread) {
                           v.node.out[0]->f32(), v.e, b.h, b.q0, v.t.ctx->thread_scratch[thread]);
 }
 
+// The fallback paths' preparation in row tasks over Q, K (and V) stacked:
+// each row rounded to bf16, or fake-quantised per head, into the scratch's
+// start (row-local arithmetic: any split gives the same values).
+struct PrepTask {
+  const AttnState* s;
+  int n;  // matrices: Q, K (, V)
+  const float* src[3];
+  float* dst[3];
+  int rows[3];
+};
+
+void prep_task(void* data, int task, int) {
+  const auto* p = static_cast<const PrepTask*>(data);
+  const AttnState& s = *p->s;
+  const int e = s.shape.heads * s.shape.head_dim;
+  int r0 = s.prep.begin(task), r1 = s.prep.end(task);
+  for (int m = 0; m < p->n; ++m) {
+    const int a = r0 > 0 ? r0 : 0, b = r1 < p->rows[m] ? r1 : p->rows[m];
+    if (a < b) {
+      const float* x = p->src[m] + size_t(a) * e;
+      float* y = p->dst[m] + size_t(a) * e;
+      if (s.scores == Scores::kBf16Rounded) {
+        kernels::bf16_round_rows(b - a, e, x, size_t(e), y);
+      } else {
+        kernels::qs8_fake_quantize_rows(b - a, s.shape.heads, s.shape.head_dim, x, size_t(e), y);
+      }
+    }
+    r0 -= p->rows[m];
+    r1 -= p->rows[m];
+  }
+}
+
 void eval_attention(const OpNode& node, const RunContext& ctx) {
   const auto& s = node.state_as<AttnState>();
   AttnTask t{&node, &ctx, node.in[0]->f32(), node.in[1]->f32(), node.in[2]->f32(), ctx.scratch};
@@ -127,9 +160,9 @@ void eval_attention(const OpNode& node, const RunContext& ctx) {
     float* qb = ctx.scratch;
     float* kb = qb + size_t(s.shape.q_len) * e;
     float* vb = kb + size_t(s.shape.kv_len) * e;
-    kernels::bf16_round_rows(s.shape.q_len, e, t.q, size_t(e), qb);
-    kernels::bf16_round_rows(s.shape.kv_len, e, t.k, size_t(e), kb);
-    kernels::bf16_round_rows(s.shape.kv_len, e, t.v, size_t(e), vb);
+    PrepTask p{
+        &s, 3, {t.q, t.k, t.v}, {qb, kb, vb}, {s.shape.q_len, s.shape.kv_len, s.shape.kv_len}};
+    parallel_for(ctx, s.prep.tasks, prep_task, &p);
     t = {&node, &ctx, qb, kb, vb, ctx.scratch + s.fq_floats};
   }
   if (s.scores == Scores::kInt8Kernel) {
@@ -141,10 +174,8 @@ void eval_attention(const OpNode& node, const RunContext& ctx) {
     const int e = s.shape.heads * s.shape.head_dim;
     float* qf = ctx.scratch;
     float* kf = qf + size_t(s.shape.q_len) * e;
-    kernels::qs8_fake_quantize_rows(s.shape.q_len, s.shape.heads, s.shape.head_dim, t.q, size_t(e),
-                                    qf);
-    kernels::qs8_fake_quantize_rows(s.shape.kv_len, s.shape.heads, s.shape.head_dim, t.k, size_t(e),
-                                    kf);
+    PrepTask p{&s, 2, {t.q, t.k, nullptr}, {qf, kf, nullptr}, {s.shape.q_len, s.shape.kv_len, 0}};
+    parallel_for(ctx, s.prep.tasks, prep_task, &p);
     t = {&node, &ctx, qf, kf, t.v, ctx.scratch + s.fq_floats};
   }
   if (!s.fast) {
@@ -225,6 +256,7 @@ Status prepare_attention(OpNode& node) {
                            : Scores::kF32;
   if (scores == 1) s.fq_floats = (q->rows() + k->rows()) * size_t(e);
   if (scores == 2) s.fq_floats = (q->rows() + 2 * k->rows()) * size_t(e);
+  s.prep = make_split(int(q->rows() + (scores == 2 ? 2 : 1) * k->rows()), 16, node.threads);
   s.fast = node.ks && (d + node.ks->lanes - 1) / node.ks->lanes <= 8;
   if (s.fast) {
     const int step = node.ks->attn_key_block;
