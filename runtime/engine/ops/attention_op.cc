@@ -186,6 +186,13 @@ void eval_attention(const OpNode& node, const RunContext& ctx) {
   parallel_for(ctx, s.shape.heads * s.chunks.tasks, block_task, &t);
 }
 
+// The fused kernels' blocking, whichever table runs: keys padded to whole key
+// blocks, query rows split into chunks of whole row groups, at most max_rows.
+void plan_blocks(AttnState& s, int key_block, int group_rows, int max_rows) {
+  s.lk_pad = (s.shape.kv_len + key_block - 1) / key_block * key_block;
+  s.chunks = make_split(s.shape.q_len, group_rows, (s.shape.q_len + max_rows - 1) / max_rows);
+}
+
 }  // namespace
 
 Status prepare_attention(OpNode& node) {
@@ -228,10 +235,7 @@ Status prepare_attention(OpNode& node) {
       (d + node.ks->lanes - 1) / node.ks->lanes <= 8) {
     s.scores = Scores::kInt8Kernel;
     s.fast = true;
-    const int step = qks->attn_key_block;
-    s.lk_pad = (s.shape.kv_len + step - 1) / step * step;
-    s.chunks = make_split(s.shape.q_len, qks->attn_group_rows,
-                          (s.shape.q_len + qks->attn_max_rows - 1) / qks->attn_max_rows);
+    plan_blocks(s, qks->attn_key_block, qks->attn_group_rows, qks->attn_max_rows);
     node.scratch_floats =
         size_t(e) * s.lk_pad + (qks->attn_kq_bytes(heads, s.lk_pad, d) + 3) / 4;  // V, then K
     node.thread_scratch_floats = qks->attn_scratch(d);
@@ -242,10 +246,7 @@ Status prepare_attention(OpNode& node) {
   if (scores == 2 && bks && d % 2 == 0 && d <= 128) {
     s.scores = Scores::kBf16Kernel;
     s.fast = true;
-    const int step = bks->key_block;
-    s.lk_pad = (s.shape.kv_len + step - 1) / step * step;
-    s.chunks = make_split(s.shape.q_len, bks->group_rows,
-                          (s.shape.q_len + bks->max_rows - 1) / bks->max_rows);
+    plan_blocks(s, bks->key_block, bks->group_rows, bks->max_rows);
     node.scratch_floats = (bks->kv_bytes(heads, s.lk_pad, d) + 3) / 4;
     node.thread_scratch_floats = bks->scratch(d);
     node.kernel = bks->isa;
@@ -259,11 +260,7 @@ Status prepare_attention(OpNode& node) {
   s.prep = make_split(int(q->rows() + (scores == 2 ? 2 : 1) * k->rows()), 16, node.threads);
   s.fast = node.ks && (d + node.ks->lanes - 1) / node.ks->lanes <= 8;
   if (s.fast) {
-    const int step = node.ks->attn_key_block;
-    s.lk_pad = (s.shape.kv_len + step - 1) / step * step;
-    const int max_rows = node.ks->attn_max_rows;
-    s.chunks = make_split(s.shape.q_len, node.ks->attn_group_rows,
-                          (s.shape.q_len + max_rows - 1) / max_rows);
+    plan_blocks(s, node.ks->attn_key_block, node.ks->attn_group_rows, node.ks->attn_max_rows);
     node.scratch_floats = s.fq_floats + 2 * size_t(e) * s.lk_pad;  // packed K^T and V
     node.thread_scratch_floats = node.ks->attn_scratch(d);
     node.kernel = node.ks->isa;
