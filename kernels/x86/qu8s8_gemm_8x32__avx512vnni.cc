@@ -24,6 +24,17 @@ inline int32_t load_a_tail(const uint8_t* p, int n) {  // n (1..3) valid bytes, 
   return int32_t(v);
 }
 
+// acc + the four u8 x s8 products of each 32-bit lane of a and b, in place.
+// With the intrinsic, GCC 12 gave the result a register apart from the
+// accumulator and copied every accumulator back after every vpdpbusd (two
+// register moves per instruction, 64 instructions per 16 products, and
+// spills): the tile ran at two thirds of VNNI's rate. The asm ties the
+// accumulator to the result, as vfmadd231ps's is.
+inline __m512i dpbusd(__m512i acc, __m512i a_u8, __m512i b_s8) {
+  __asm__("vpdpbusd %2, %1, %0" : "+v"(acc) : "v"(a_u8), "vm"(b_s8));
+  return acc;
+}
+
 template <int R>
 void tile(const QGemmArgs& g, int r0, int j0, int ncols, const int8_t* wp) {
   __m512i acc[R][2];
@@ -37,8 +48,8 @@ void tile(const QGemmArgs& g, int r0, int j0, int ncols, const int8_t* wp) {
 #pragma GCC unroll 8
     for (int r = 0; r < R; ++r) {
       const __m512i av = _mm512_set1_epi32(load_a4(a[r] + gi * kG));
-      acc[r][0] = _mm512_dpbusd_epi32(acc[r][0], av, b0);
-      acc[r][1] = _mm512_dpbusd_epi32(acc[r][1], av, b1);
+      acc[r][0] = dpbusd(acc[r][0], av, b0);
+      acc[r][1] = dpbusd(acc[r][1], av, b1);
     }
   }
   if (const int left = g.k - full * kG) {  // a partial last group: never read past a row
@@ -46,8 +57,8 @@ void tile(const QGemmArgs& g, int r0, int j0, int ncols, const int8_t* wp) {
     const __m512i b1 = _mm512_loadu_si512(wp + size_t(full) * kNr * kG + 64);
     for (int r = 0; r < R; ++r) {
       const __m512i av = _mm512_set1_epi32(load_a_tail(a[r] + full * kG, left));
-      acc[r][0] = _mm512_dpbusd_epi32(acc[r][0], av, b0);
-      acc[r][1] = _mm512_dpbusd_epi32(acc[r][1], av, b1);
+      acc[r][0] = dpbusd(acc[r][0], av, b0);
+      acc[r][1] = dpbusd(acc[r][1], av, b1);
     }
   }
   const __m512i za = _mm512_set1_epi32(g.a_zero);
