@@ -89,6 +89,10 @@ def ensure_int8(d, attention=None):
     return out
 
 
+def input_label(s):
+    return {"bev": "BEV 256x256x2", "points": "points 4096x6"}.get(s, f"{s}x{s}")
+
+
 def p99(xs):
     xs = sorted(xs)
     pos = 0.99 * (len(xs) - 1)
@@ -181,7 +185,7 @@ def main():
         for t in threads:
             om, am = statistics.median(ort[(s, t)]), statistics.median(ours[(s, t)])
             d = info[(s, t)]
-            label = {"bev": "BEV 256x256x2", "points": "points 4096x6"}.get(s, f"{s}x{s}")
+            label = input_label(s)
             row = (f"| {label} | {t} | {om:.1f} | {p99(ort[(s, t)]):.1f} | {am:.1f} | "
                    f"{p99(ours[(s, t)]):.1f} | **{om / am:.2f}x** |")
             if not a.no_int8 and int8[(s, t)]:
@@ -199,7 +203,7 @@ def main():
     for s in sizes:
         for t in threads:
             om, am = min(ort[(s, t)]), min(ours[(s, t)])
-            label = {"bev": "BEV 256x256x2", "points": "points 4096x6"}.get(s, f"{s}x{s}")
+            label = input_label(s)
             row = f"| {label} | {t} | {om:.1f} | {am:.1f} | {om / am:.2f}x |"
             if not a.no_int8:
                 row += (f" {min(int8[(s, t)]):.1f} | {om / min(int8[(s, t)]):.2f}x |"
