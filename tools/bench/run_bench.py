@@ -206,8 +206,8 @@ def main():
             label = input_label(s)
             row = f"| {label} | {t} | {om:.1f} | {am:.1f} | {om / am:.2f}x |"
             if not a.no_int8:
-                row += (f" {min(int8[(s, t)]):.1f} | {om / min(int8[(s, t)]):.2f}x |"
-                        if int8[(s, t)] else " — | — |")
+                qm = min(int8[(s, t)], default=None)
+                row += f" {qm:.1f} | {om / qm:.2f}x |" if qm else " — | — |"
             fast.append(row)
     table = (head + "\n\n" + "\n".join(lines) + "\n\nFastest run of each (the host's noise only adds):\n\n" +
              "\n".join(fast) + "\n")
