@@ -34,10 +34,12 @@ static size_t attn_q8_head_bytes(int lk_pad, int d) {
 
 // One row of d values (d % 4 == 0, d <= 128) quantised as qs8_attention.h
 // says, 16 at a time: max |x| exact, then x * inv rounded half to even by
-// vcvtps2dq (MXCSR's default mode) -- the same bits as qs8_round (a NaN
-// row: scale NaN, its bytes whatever vcvtps2dq makes of NaN). Writes d
-// bytes of q8 + bias (0 or 128) to out and returns the scale; *sum gets
-// sum_p q8.
+// vcvtps2dq (MXCSR's default mode) -- the same bits as qs8_round. A lane
+// whose x * inv is not finite (a NaN or infinite row: inv is 0 then) is 0,
+// as qs8_round makes it, not vcvtps2dq's 0x80000000: d of those summed
+// would overflow the key's correction term. The row's NaN scale carries
+// the garbage to the scores. Writes d bytes of q8 + bias (0 or 128) to out
+// and returns the scale; *sum gets sum_p q8, in [-127 d, 127 d].
 static float attn_q8_row(const float* x, int d, int bias, uint8_t* out, int32_t* sum) {
   V amax = vzero();
   __mmask16 nan = 0;
@@ -53,7 +55,10 @@ static float attn_q8_row(const float* x, int d, int bias, uint8_t* out, int32_t*
   __m512i acc = _mm512_setzero_si512();
   for (int p = 0; p < d; p += kLanes) {
     const int n = d - p < kLanes ? d - p : kLanes;
-    const __m512i q = _mm512_cvtps_epi32(vmul(vload_n(x + p, n), vi));
+    const V y = vmul(vload_n(x + p, n), vi);
+    // |y| <= 127 wherever it is finite; NaN compares false.
+    const __mmask16 finite = _mm512_cmp_ps_mask(vabs(y), vset1(128.0f), _CMP_LT_OQ);
+    const __m512i q = _mm512_maskz_cvtps_epi32(finite, y);
     const __mmask16 mk = __mmask16((1u << n) - 1);
     acc = _mm512_mask_add_epi32(acc, mk, acc, q);
     _mm_mask_storeu_epi8(out + p, mk,

@@ -297,6 +297,39 @@ TEST_P(QKernels, AttentionScoresInt8NaNRowStaysInItsRow) {
   }
 }
 
+// A NaN in one key row and an infinity in another (the fuzzer's finding: a
+// corrupt weight): the keys' heads come out NaN wherever the reference's do,
+// the other head equals the reference's, and quantising the bad rows is
+// defined behaviour (UBSan in the default run watches the correction term).
+TEST_P(QKernels, AttentionScoresInt8NonFiniteKeyRows) {
+  if (!ks_->attn_block) GTEST_SKIP() << GetParam().name << " has no int8-score attention";
+  const AttentionShape s{7, 45, 3, 32};
+  const int e = 96;
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<float> q(size_t(7) * e), k(size_t(45) * e), v(size_t(45) * e);
+  for (float& x : q) x = u(rng);
+  for (float& x : k) x = u(rng);
+  for (float& x : v) x = u(rng);
+  for (int c = 0; c < 32; ++c) k[size_t(6) * e + c] = std::numeric_limits<float>::quiet_NaN();
+  k[size_t(30) * e + 64 + 5] = std::numeric_limits<float>::infinity();  // head 2
+  std::vector<float> got(q.size(), -3.0f), want(q.size()), rs(qs8_attention__ref_scratch(s));
+  qs8_attention__ref(s, q.data(), k.data(), v.data(), 0.18f, want.data(), rs.data());
+  ASSERT_TRUE(q8_attention(*ks_, s, q, k, v, 0.18f, &got));
+  int bad = 0;
+  for (size_t at = 0; at < got.size(); ++at) {
+    const int head = int(at % size_t(e)) / 32;
+    if (head != 1) {
+      EXPECT_EQ(std::isfinite(got[at]), std::isfinite(want[at])) << "at " << at;
+      bad += !std::isfinite(want[at]);
+      continue;
+    }
+    ASSERT_TRUE(std::isfinite(got[at])) << "at " << at;
+    ASSERT_NEAR(got[at], want[at], 2e-5 * (1.0 + std::fabs(want[at]))) << "at " << at;
+  }
+  EXPECT_GT(bad, 0) << "the bad keys should reach their heads' outputs";
+}
+
 TEST_P(QKernels, AttentionScoresInt8OnOddShapes) {
   if (!ks_->attn_block) GTEST_SKIP() << GetParam().name << " has no int8-score attention";
   std::mt19937 rng(99);
