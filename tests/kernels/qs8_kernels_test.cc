@@ -266,6 +266,22 @@ TEST(QAttention, QuantisationRoundsToNearestEvenWithinTheRowScale) {
   for (int i = 0; i < 2; ++i) EXPECT_FALSE(std::isfinite(y[i])) << i;
 }
 
+// Q, K and V uniform in [-1, 1] for shape s, seeded.
+struct Qkv {
+  std::vector<float> q, k, v;
+};
+Qkv random_qkv(const AttentionShape& s, unsigned seed) {
+  const size_t e = size_t(s.heads) * s.head_dim;
+  Qkv t{std::vector<float>(size_t(s.q_len) * e), std::vector<float>(size_t(s.kv_len) * e),
+        std::vector<float>(size_t(s.kv_len) * e)};
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (auto* m : {&t.q, &t.k, &t.v}) {
+    for (float& x : *m) x = u(rng);
+  }
+  return t;
+}
+
 // A NaN in one query row: that row's output (of its head) is NaN, as the
 // reference's -- the weights' clamp keeps a NaN score NaN -- and the other
 // rows' outputs are untouched (equal to the reference's) and finite.
@@ -273,12 +289,7 @@ TEST_P(QKernels, AttentionScoresInt8NaNRowStaysInItsRow) {
   if (!ks_->attn_block) GTEST_SKIP() << GetParam().name << " has no int8-score attention";
   const AttentionShape s{9, 40, 2, 32};
   const int e = 64;
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  std::vector<float> q(size_t(9) * e), k(size_t(40) * e), v(size_t(40) * e);
-  for (float& x : q) x = u(rng);
-  for (float& x : k) x = u(rng);
-  for (float& x : v) x = u(rng);
+  auto [q, k, v] = random_qkv(s, 3);
   q[size_t(4) * e + 3] = std::numeric_limits<float>::quiet_NaN();  // row 4, head 0
   std::vector<float> got(q.size(), -3.0f), want(q.size()), rs(qs8_attention__ref_scratch(s));
   qs8_attention__ref(s, q.data(), k.data(), v.data(), 0.18f, want.data(), rs.data());
@@ -305,12 +316,7 @@ TEST_P(QKernels, AttentionScoresInt8NonFiniteKeyRows) {
   if (!ks_->attn_block) GTEST_SKIP() << GetParam().name << " has no int8-score attention";
   const AttentionShape s{7, 45, 3, 32};
   const int e = 96;
-  std::mt19937 rng(8);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  std::vector<float> q(size_t(7) * e), k(size_t(45) * e), v(size_t(45) * e);
-  for (float& x : q) x = u(rng);
-  for (float& x : k) x = u(rng);
-  for (float& x : v) x = u(rng);
+  auto [q, k, v] = random_qkv(s, 8);
   for (int c = 0; c < 32; ++c) k[size_t(6) * e + c] = std::numeric_limits<float>::quiet_NaN();
   k[size_t(30) * e + 64 + 5] = std::numeric_limits<float>::infinity();  // head 2
   std::vector<float> got(q.size(), -3.0f), want(q.size()), rs(qs8_attention__ref_scratch(s));
