@@ -41,10 +41,10 @@ install(FILES README.md docs/configuration.md docs/outputs.md
 # public headers reach, an exported target set and a version file.
 set_target_properties(aprt_engine PROPERTIES EXPORT_NAME engine)
 set_target_properties(aprt_kernels PROPERTIES EXPORT_NAME kernels)
-set_target_properties(aprt_common PROPERTIES EXPORT_NAME common)
-install(TARGETS aprt_engine aprt_kernels aprt_common EXPORT aprtTargets
+set_target_properties(aprt_base PROPERTIES EXPORT_NAME base)
+install(TARGETS aprt_engine aprt_kernels aprt_base EXPORT aprtTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT dev)
-foreach(dir runtime/common runtime/engine runtime/pose kernels/common)
+foreach(dir runtime/base runtime/engine runtime/pose kernels)
   install(DIRECTORY ${dir}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/aprt/${dir} COMPONENT dev
           FILES_MATCHING PATTERN "*.h")
 endforeach()

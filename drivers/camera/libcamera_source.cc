@@ -28,18 +28,18 @@ namespace {
 struct FormatEntry {
   const char* name;
   libcamera::PixelFormat libcamera;
-  kernels::PixelFormat aprt;  // what lands in the slot
+  PixelFormat aprt;  // what lands in the slot
 };
 
 // libcamera's RGB888 / BGR888 are DRM fourccs, named by a little-endian
 // 24-bit word: BGR888 is R, G, B in memory (aprt's RGB24), RGB888 is B, G, R.
 const FormatEntry kFormats[] = {
-    {"YUYV", libcamera::formats::YUYV, kernels::PixelFormat::kYuyv},
-    {"UYVY", libcamera::formats::UYVY, kernels::PixelFormat::kUyvy},
-    {"NV12", libcamera::formats::NV12, kernels::PixelFormat::kNv12},
-    {"RGB24", libcamera::formats::BGR888, kernels::PixelFormat::kRgb24},
-    {"BGR24", libcamera::formats::RGB888, kernels::PixelFormat::kBgr24},
-    {"MJPEG", libcamera::formats::MJPEG, kernels::PixelFormat::kRgb24},
+    {"YUYV", libcamera::formats::YUYV, PixelFormat::kYuyv},
+    {"UYVY", libcamera::formats::UYVY, PixelFormat::kUyvy},
+    {"NV12", libcamera::formats::NV12, PixelFormat::kNv12},
+    {"RGB24", libcamera::formats::BGR888, PixelFormat::kRgb24},
+    {"BGR24", libcamera::formats::RGB888, PixelFormat::kBgr24},
+    {"MJPEG", libcamera::formats::MJPEG, PixelFormat::kRgb24},
 };
 
 // libcamera allows one CameraManager per process; every source shares it.
@@ -161,16 +161,16 @@ Expected<std::unique_ptr<LibcameraSource>> LibcameraSource::create(const Libcame
                  "libcamera: %dx%d at %d fps with %d buffers is out of range", o.width, o.height,
                  o.fps, o.buffers);
   }
-  const kernels::PixelFormat pf = m.fmt->aprt;
+  const PixelFormat pf = m.fmt->aprt;
   // Room for a driver's padded stride (up to 64-byte alignment of each row).
-  const size_t stride = (kernels::min_stride(pf, o.width) + 63) / 64 * 64;
-  m.max_bytes = pf == kernels::PixelFormat::kNv12 ? stride * size_t(o.height) * 3 / 2 + stride
-                                                  : stride * size_t(o.height);
+  const size_t stride = (min_stride(pf, o.width) + 63) / 64 * 64;
+  m.max_bytes = pf == PixelFormat::kNv12 ? stride * size_t(o.height) * 3 / 2 + stride
+                                         : stride * size_t(o.height);
   if (o.format == "MJPEG") {
     auto d = ImageDecoder::create(size_t(o.width) * o.height * 3);
     if (!d) return d.error();
     m.decoder = std::move(d.value());
-    m.max_bytes = kernels::frame_bytes(kernels::PixelFormat::kRgb24, o.width, o.height);
+    m.max_bytes = frame_bytes(PixelFormat::kRgb24, o.width, o.height);
   }
   m.event_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
   if (m.event_fd < 0) {
@@ -195,7 +195,7 @@ size_t LibcameraSource::max_frame_bytes() const {
 const Error& LibcameraSource::error() const {
   return impl_->error;
 }
-kernels::PixelFormat LibcameraSource::format() const {
+PixelFormat LibcameraSource::format() const {
   return impl_->fmt->aprt;
 }
 uint64_t LibcameraSource::reopens() const {
@@ -265,10 +265,10 @@ Status LibcameraSource::Impl::open() {
   stream = sc.stream();
   width = int(sc.size.width);
   height = int(sc.size.height);
-  stride = decoder ? kernels::min_stride(kernels::PixelFormat::kRgb24, width)
-                   : (sc.stride ? size_t(sc.stride) : kernels::min_stride(fmt->aprt, width));
-  frame_bytes = fmt->aprt == kernels::PixelFormat::kNv12 ? stride * size_t(height) * 3 / 2
-                                                         : stride * size_t(height);
+  stride = decoder ? min_stride(PixelFormat::kRgb24, width)
+                   : (sc.stride ? size_t(sc.stride) : min_stride(fmt->aprt, width));
+  frame_bytes =
+      fmt->aprt == PixelFormat::kNv12 ? stride * size_t(height) * 3 / 2 : stride * size_t(height);
   if (!decoder && frame_bytes > max_bytes) {
     return fail(Errc::kUnsupported,
                 "libcamera: camera '%s' pads rows to %s bytes, more than aprt sized for",

@@ -48,7 +48,7 @@ class LibcameraSource final : public FrameSource {
   void stop() override;
   const Error& error() const override;
 
-  kernels::PixelFormat format() const;
+  PixelFormat format() const;
   uint64_t reopens() const;
   // The cameras libcamera sees on this machine, one "index: id (model)" per line.
   static std::string list_cameras();

@@ -27,8 +27,8 @@ void LibcameraSource::stop() {}
 const Error& LibcameraSource::error() const {
   return impl_->error;
 }
-kernels::PixelFormat LibcameraSource::format() const {
-  return kernels::PixelFormat::kYuyv;
+PixelFormat LibcameraSource::format() const {
+  return PixelFormat::kYuyv;
 }
 uint64_t LibcameraSource::reopens() const {
   return 0;

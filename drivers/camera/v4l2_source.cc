@@ -21,17 +21,17 @@ namespace {
 struct FormatName {
   const char* name;
   uint32_t fourcc;
-  kernels::PixelFormat format;
+  PixelFormat format;
 };
 
 constexpr FormatName kFormats[] = {
-    {"YUYV", V4L2_PIX_FMT_YUYV, kernels::PixelFormat::kYuyv},
-    {"UYVY", V4L2_PIX_FMT_UYVY, kernels::PixelFormat::kUyvy},
-    {"NV12", V4L2_PIX_FMT_NV12, kernels::PixelFormat::kNv12},
-    {"RGB24", V4L2_PIX_FMT_RGB24, kernels::PixelFormat::kRgb24},
-    {"BGR24", V4L2_PIX_FMT_BGR24, kernels::PixelFormat::kBgr24},
+    {"YUYV", V4L2_PIX_FMT_YUYV, PixelFormat::kYuyv},
+    {"UYVY", V4L2_PIX_FMT_UYVY, PixelFormat::kUyvy},
+    {"NV12", V4L2_PIX_FMT_NV12, PixelFormat::kNv12},
+    {"RGB24", V4L2_PIX_FMT_RGB24, PixelFormat::kRgb24},
+    {"BGR24", V4L2_PIX_FMT_BGR24, PixelFormat::kBgr24},
     // Decoded on the capture thread into the slot as RGB24 (libjpeg-turbo).
-    {"MJPEG", V4L2_PIX_FMT_MJPEG, kernels::PixelFormat::kRgb24},
+    {"MJPEG", V4L2_PIX_FMT_MJPEG, PixelFormat::kRgb24},
 };
 
 // ioctl, retried on EINTR.
@@ -73,7 +73,7 @@ Expected<std::unique_ptr<V4l2Source>> V4l2Source::create(const V4l2Options& o) {
   }
   // The slot is sized for the configured frame; a device that insists on a
   // larger one is refused at start() (the slot cannot grow after start-up).
-  s->max_bytes_ = kernels::frame_bytes(s->format_, o.width, o.height) + 4096;
+  s->max_bytes_ = frame_bytes(s->format_, o.width, o.height) + 4096;
   if (s->fourcc_ == V4L2_PIX_FMT_MJPEG) {
     // No file buffer and no PNG arena: only the JPEG decompressor is used.
     auto d = ImageDecoder::create(1, 4096);
@@ -161,11 +161,10 @@ Status V4l2Source::open_device() {
   }
   width_ = int(fmt.fmt.pix.width);
   height_ = int(fmt.fmt.pix.height);
-  stride_ =
-      fmt.fmt.pix.bytesperline ? fmt.fmt.pix.bytesperline : kernels::min_stride(format_, width_);
-  if (decoder_) stride_ = kernels::min_stride(format_, width_);  // the decoded RGB rows
-  const size_t need = format_ == kernels::PixelFormat::kNv12 ? stride_ * size_t(height_) * 3 / 2
-                                                             : stride_ * size_t(height_);
+  stride_ = fmt.fmt.pix.bytesperline ? fmt.fmt.pix.bytesperline : min_stride(format_, width_);
+  if (decoder_) stride_ = min_stride(format_, width_);  // the decoded RGB rows
+  const size_t need =
+      format_ == PixelFormat::kNv12 ? stride_ * size_t(height_) * 3 / 2 : stride_ * size_t(height_);
   if (need > max_bytes_) {
     return Error(Errc::kInvalidArgument,
                  "v4l2: %s negotiated %dx%d (%zu bytes a frame), larger than the configured %dx%d: "
@@ -267,8 +266,8 @@ SourceResult V4l2Source::next(FrameBuffer* dst, int64_t timeout_ns) {
     return SourceResult::kFailed;
   }
   SourceResult result = SourceResult::kFrame;
-  const size_t expect = format_ == kernels::PixelFormat::kNv12 ? stride_ * size_t(height_) * 3 / 2
-                                                               : stride_ * size_t(height_);
+  const size_t expect =
+      format_ == PixelFormat::kNv12 ? stride_ * size_t(height_) * 3 / 2 : stride_ * size_t(height_);
   if (b.flags & V4L2_BUF_FLAG_ERROR) {
     error_ = Error(Errc::kIo, "v4l2: %s: the driver marked frame %u corrupt", o_.device.c_str(),
                    b.sequence);

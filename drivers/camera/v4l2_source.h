@@ -47,7 +47,7 @@ class V4l2Source final : public FrameSource {
   // What was negotiated (valid after start()).
   int width() const { return width_; }
   int height() const { return height_; }
-  kernels::PixelFormat format() const { return format_; }
+  PixelFormat format() const { return format_; }
   uint64_t reopens() const { return reopens_; }
 
  private:
@@ -58,7 +58,7 @@ class V4l2Source final : public FrameSource {
   std::unique_ptr<ImageDecoder> decoder_;  // MJPEG only
   V4l2Options o_;
   uint32_t fourcc_ = 0;
-  kernels::PixelFormat format_ = kernels::PixelFormat::kYuyv;
+  PixelFormat format_ = PixelFormat::kYuyv;
   size_t max_bytes_ = 0;
   int fd_ = -1;
   int width_ = 0, height_ = 0;

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 
 namespace aprt::can {
 

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "drivers/can/pose_can_codec.h"
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 
 namespace aprt::can {
 

@@ -9,7 +9,7 @@
 #include <memory>
 #include <string>
 
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 
 namespace aprt {
 

@@ -13,7 +13,7 @@
 
 #include "drivers/lidar/point_cloud.h"
 #include "drivers/lidar/pointcloud2_decode.h"
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 
 namespace aprt {
 

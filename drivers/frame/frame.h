@@ -5,8 +5,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "kernels/common/image_types.h"
-#include "kernels/common/lidar_types.h"
+#include "runtime/base/image.h"
+#include "runtime/base/lidar_point.h"
 
 namespace aprt {
 
@@ -30,7 +30,7 @@ struct FrameInfo {
   // when the source has one; 0: the publishers stamp from capture_ns.
   int64_t source_stamp_ns = 0;
   int width = 0, height = 0;
-  kernels::PixelFormat format = kernels::PixelFormat::kRgb24;
+  PixelFormat format = PixelFormat::kRgb24;
   size_t stride = 0;    // bytes per row
   size_t bytes = 0;     // valid bytes in the buffer
   uint32_t source = 0;  // camera index
@@ -46,12 +46,8 @@ struct FrameBuffer {
   uint8_t* data = nullptr;
   size_t capacity = 0;
 
-  kernels::ImageView view() const {
-    return {data, info.format, info.width, info.height, info.stride};
-  }
-  const kernels::LidarPoint* points() const {
-    return reinterpret_cast<const kernels::LidarPoint*>(data);
-  }
+  ImageView view() const { return {data, info.format, info.width, info.height, info.stride}; }
+  const LidarPoint* points() const { return reinterpret_cast<const LidarPoint*>(data); }
 };
 
 }  // namespace aprt

@@ -10,7 +10,7 @@
 #include <cstring>
 #include <new>
 
-#include "runtime/common/check.h"
+#include "runtime/base/check.h"
 
 namespace aprt {
 

@@ -11,7 +11,7 @@
 #include <memory>
 
 #include "drivers/frame/frame.h"
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 
 namespace aprt {
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 
 #include "drivers/frame/frame.h"
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 
 namespace aprt {
 

@@ -4,7 +4,7 @@
 #include <cstring>
 #include <new>
 
-#include "runtime/common/check.h"
+#include "runtime/base/check.h"
 
 namespace aprt {
 

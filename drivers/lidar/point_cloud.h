@@ -10,12 +10,12 @@
 #include <cstdint>
 #include <memory>
 
-#include "kernels/common/lidar_types.h"
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
+#include "runtime/base/lidar_point.h"
 
 namespace aprt {
 
-using Point = kernels::LidarPoint;
+using Point = LidarPoint;
 
 // Where points may be: anything outside is clipped to the box.
 struct PointRegion {

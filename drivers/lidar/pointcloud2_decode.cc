@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "runtime/common/check.h"
+#include "runtime/base/check.h"
 
 namespace aprt {
 namespace {

@@ -5,7 +5,7 @@
 #include <cstring>
 #include <new>
 
-#include "runtime/common/check.h"
+#include "runtime/base/check.h"
 
 namespace aprt {
 
@@ -56,7 +56,7 @@ Status DeeplocReplay::read(size_t i, FrameBuffer* dst, uint64_t sequence, int64_
   f.capture_ns = capture_ns;
   f.width = img->width;
   f.height = img->height;
-  f.format = kernels::PixelFormat::kRgb24;
+  f.format = PixelFormat::kRgb24;
   f.stride = size_t(img->width) * 3;
   f.bytes = img->bytes;
   f.has_truth = true;

@@ -13,7 +13,7 @@
 #include "drivers/frame/frame.h"
 #include "drivers/replay/image_decoder.h"
 #include "drivers/replay/pose_list.h"
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 
 namespace aprt {
 

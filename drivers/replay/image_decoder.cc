@@ -15,7 +15,7 @@
 // jpeglib.h needs FILE and size_t declared first.
 #include <jpeglib.h>
 
-#include "runtime/common/check.h"
+#include "runtime/base/check.h"
 
 namespace aprt {
 
@@ -255,7 +255,7 @@ Expected<DecodedImage> ImageDecoder::decode_jpeg(const char* path, const uint8_t
 
 #else  // built without libpng / libjpeg for this target
 
-#include "runtime/common/check.h"
+#include "runtime/base/check.h"
 
 namespace aprt {
 

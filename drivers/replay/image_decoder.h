@@ -11,7 +11,7 @@
 #include <cstdint>
 #include <memory>
 
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 
 namespace aprt {
 

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "runtime/common/check.h"
+#include "runtime/base/check.h"
 
 namespace aprt {
 

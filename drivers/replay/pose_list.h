@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 
 namespace aprt {
 

@@ -8,9 +8,9 @@
 #include <random>
 #include <vector>
 
+#include "runtime/base/allocation_counter.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
-#include "runtime/common/allocation_counter.h"
 #include "runtime/engine/engine.h"
 
 namespace aprt::cli {

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "kernels/common/preprocess_image.h"
+#include "kernels/preprocess/preprocess_image.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
 #include "runtime/cli/load_model.h"
@@ -27,11 +27,10 @@
 namespace aprt::cli {
 namespace {
 
-bool parse_format(const std::string& s, kernels::PixelFormat* f) {
-  using kernels::PixelFormat;
+bool parse_format(const std::string& s, PixelFormat* f) {
   for (PixelFormat p : {PixelFormat::kRgb24, PixelFormat::kBgr24, PixelFormat::kYuyv,
                         PixelFormat::kUyvy, PixelFormat::kNv12, PixelFormat::kGray8}) {
-    if (s == kernels::pixel_format_name(p)) {
+    if (s == pixel_format_name(p)) {
       *f = p;
       return true;
     }
@@ -86,7 +85,7 @@ int cmd_infer(int argc, char** argv) {
       have_pose = bool(in);
     }
   }
-  kernels::PixelFormat format;
+  PixelFormat format;
   if (!parse_format(format_name, &format) || width <= 0 || height <= 0 || stride == 0) {
     std::fprintf(stderr, "aprt infer: %s.txt: no usable format/width/height/stride\n", frame);
     return 2;
@@ -94,7 +93,7 @@ int cmd_infer(int argc, char** argv) {
   std::ifstream raw(frame, std::ios::binary);
   std::vector<uint8_t> pixels((std::istreambuf_iterator<char>(raw)),
                               std::istreambuf_iterator<char>());
-  if (pixels.size() != bytes || bytes < kernels::frame_bytes(format, width, height)) {
+  if (pixels.size() != bytes || bytes < frame_bytes(format, width, height)) {
     std::fprintf(stderr, "aprt infer: %s has %zu bytes, its .txt says %zu (%dx%d %s)\n", frame,
                  pixels.size(), bytes, width, height, format_name.c_str());
     return 2;
@@ -111,7 +110,7 @@ int cmd_infer(int argc, char** argv) {
                  height);
     return 2;
   }
-  const kernels::ImageView view{pixels.data(), format, width, height, stride};
+  const ImageView view{pixels.data(), format, width, height, stride};
   kernels::preprocess_image(*plan, view, e.input().f32());
   (void)e.run();
   const PoseEstimate p = decode_pose(e.output().f32(), m);

@@ -8,9 +8,9 @@
 #include <cstdlib>
 #include <string>
 
+#include "runtime/base/allocation_counter.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
-#include "runtime/common/allocation_counter.h"
 #include "runtime/config/config.h"
 #include "runtime/engine/engine.h"
 #include "runtime/loop/model_loader.h"

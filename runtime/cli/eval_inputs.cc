@@ -6,8 +6,8 @@
 #include "drivers/frame/frame.h"
 #include "drivers/lidar/lidar_sequence.h"
 #include "drivers/replay/deeploc_replay.h"
-#include "kernels/common/lidar_input.h"
-#include "kernels/common/preprocess_image.h"
+#include "kernels/preprocess/lidar_input.h"
+#include "kernels/preprocess/preprocess_image.h"
 #include "runtime/engine/model_input.h"
 
 namespace aprt::cli {
@@ -26,8 +26,7 @@ class CameraInputs final : public EvalInputs {
     DeeplocReplay& r = *in->replay_;
     const kernels::PreprocessParams pp = preprocess_params(e.meta());
     in->plan_ = std::make_unique<kernels::PreprocessPlan>();
-    if (!kernels::plan_preprocess(pp, kernels::PixelFormat::kRgb24, r.width(), r.height(),
-                                  in->plan_.get(),
+    if (!kernels::plan_preprocess(pp, PixelFormat::kRgb24, r.width(), r.height(), in->plan_.get(),
                                   e.kernel_set() ? e.kernel_set()->preprocess : nullptr)) {
       std::fprintf(stderr, "aprt eval: cannot map %dx%d frames to the %dx%d input\n", r.width(),
                    r.height(), pp.size, pp.size);
@@ -60,7 +59,7 @@ class CameraInputs final : public EvalInputs {
 
 // Scans of up to kMaxPoints points (more are dropped and counted by the
 // gate), made into the model's input as the runtime does (BEV histogram or
-// sampled points, kernels/common/lidar_input.h), with the model's geometry.
+// sampled points, kernels/preprocess/lidar_input.h), with the model's geometry.
 class LidarInputs final : public EvalInputs {
  public:
   static constexpr size_t kMaxPoints = size_t(1) << 20;

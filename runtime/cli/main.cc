@@ -6,7 +6,7 @@
 #include <cstring>
 #include <string>
 
-#include "kernels/common/cpu_features.h"
+#include "kernels/table/cpu_features.h"
 #include "runtime/cli/commands.h"
 
 namespace {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 #include "runtime/loop/fault_injector.h"
 
 namespace aprt {

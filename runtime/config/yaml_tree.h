@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 
 namespace aprt::yaml {
 

@@ -12,10 +12,9 @@
 #include <ctime>
 #include <new>
 
-#include "kernels/common/cpu_features.h"
-#include "runtime/common/check.h"
+#include "kernels/table/cpu_features.h"
+#include "runtime/base/check.h"
 #include "runtime/engine/denormals.h"
-#include "runtime/engine/kernel_select.h"
 #include "runtime/engine/memory_planner.h"
 
 namespace aprt {
@@ -168,9 +167,9 @@ Expected<std::unique_ptr<Engine>> Engine::build(const uint8_t* data, size_t size
   APRT_ENSURE(options.threads >= 1 && options.threads <= ThreadPool::kMaxThreads,
               Errc::kInvalidArgument, "engine: %d threads (1..%d)", options.threads,
               ThreadPool::kMaxThreads);
-  auto ks = select_kernels(options.isa ? options.isa : std::getenv("APRT_ISA"));
-  if (!ks) return ks.error();
-  e->ks_ = ks.value();
+  auto table = kernels::pick_kernels(options.isa ? options.isa : std::getenv("APRT_ISA"));
+  if (!table) return table.error();
+  e->kt_ = table.value();
   if (Status s = e->bind(data, size); !s) return s.error();
   if (options.expect_modality != 0) {
     const auto m = uint32_t(e->model_.meta().modality);
@@ -179,12 +178,10 @@ Expected<std::unique_ptr<Engine>> Engine::build(const uint8_t* data, size_t size
                 format::modality_name(e->model_.meta().modality),
                 format::modality_name(format::Modality(options.expect_modality)));
   }
-  const kernels::QKernelSet* qks = select_qkernels(e->ks_);
-  const kernels::Bf16AttentionKernels* bks = select_bf16_attention(e->ks_);
   for (OpNode& n : e->nodes_) {
-    n.ks = e->ks_;
-    n.qks = qks;
-    n.bks = bks;
+    n.ks = e->kt_.f32;
+    n.qks = e->kt_.qs8;
+    n.bks = e->kt_.bf16;
     n.threads = options.threads;
   }
   if (Status s = e->prepare_ops(); !s) return s.error();
@@ -376,7 +373,7 @@ Status Engine::run_profiled(uint64_t* op_nanos) noexcept {
 }
 
 const char* Engine::isa() const {
-  return kernel_set_name(ks_);
+  return kt_.name();
 }
 
 uint64_t Engine::total_flops() const {

@@ -20,7 +20,7 @@
 #include <memory>
 #include <vector>
 
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 #include "runtime/engine/model_file.h"
 #include "runtime/engine/op_node.h"
 #include "runtime/engine/tensor.h"
@@ -95,7 +95,8 @@ class Engine {
   const char* isa() const;  // the kernels chosen at load ("avx512", "ref", ...)
   // Those kernels (null: the reference kernels), e.g. for the frame
   // preprocessing that feeds this engine.
-  const kernels::KernelSet* kernel_set() const { return ks_; }
+  const kernels::KernelSet* kernel_set() const { return kt_.f32; }
+  const kernels::KernelTable& kernel_table() const { return kt_; }
   int threads() const { return pool_ ? pool_->threads() : 1; }
   size_t op_count() const { return nodes_.size(); }
   const OpNode& op(size_t i) const { return nodes_[i]; }
@@ -121,7 +122,7 @@ class Engine {
   uint8_t* region_ = nullptr;  // image | packed | arena | scratch
   size_t region_bytes_ = 0;
   bool region_owned_ = false;
-  const kernels::KernelSet* ks_ = nullptr;
+  kernels::KernelTable kt_;  // the ISA chosen at load (kernels/table/kernel_table.h)
   std::unique_ptr<ThreadPool> pool_;
   RunContext ctx_;
   size_t scratch_floats_ = 0;         // shared, max over ops

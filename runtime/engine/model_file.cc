@@ -3,8 +3,8 @@
 #include <cmath>
 #include <cstring>
 
-#include "runtime/common/check.h"
-#include "runtime/common/crc32.h"
+#include "runtime/base/check.h"
+#include "runtime/base/crc32.h"
 
 namespace aprt {
 

@@ -13,7 +13,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 #include "runtime/engine/model_format.h"
 
 namespace aprt {

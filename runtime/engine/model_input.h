@@ -3,8 +3,8 @@
 // model's histogram geometry or point sampling -- all from the metadata.
 #pragma once
 
-#include "kernels/common/image_types.h"
-#include "kernels/common/lidar_input.h"
+#include "kernels/preprocess/lidar_input.h"
+#include "runtime/base/image.h"
 #include "runtime/engine/model_file.h"
 
 namespace aprt {

@@ -10,10 +10,9 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "kernels/common/bf16_attention.h"
-#include "kernels/common/kernel_set.h"
-#include "kernels/common/qkernel_set.h"
-#include "runtime/common/expected.h"
+#include "kernels/gemm/qs8_gemm.h"
+#include "kernels/table/kernel_table.h"
+#include "runtime/base/expected.h"
 #include "runtime/engine/model_file.h"
 #include "runtime/engine/tensor.h"
 #include "runtime/engine/thread_pool.h"

@@ -17,7 +17,7 @@
 #include <cstdint>
 #include <string>
 
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 
 namespace aprt {
 

@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "drivers/frame/frame_source.h"
-#include "kernels/common/image_types.h"
+#include "runtime/base/image.h"
 #include "runtime/config/config.h"
 
 namespace aprt {
@@ -14,7 +14,7 @@ namespace aprt {
 struct OpenedSource {
   std::unique_ptr<FrameSource> source;
   int width = 0, height = 0;  // what the source is configured to deliver
-  kernels::PixelFormat format = kernels::PixelFormat::kRgb24;
+  PixelFormat format = PixelFormat::kRgb24;
   size_t frames = 0;  // a replay's length (0 for a device)
 };
 

@@ -116,7 +116,7 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
                    opened.error().message());
     }
     const int width = opened->width, height = opened->height;
-    const kernels::PixelFormat format = opened->format;
+    const PixelFormat format = opened->format;
     if (i == 0) frames = opened->frames;
     ch->scans = src.lidar_source();
     ch->source = std::move(opened->source);
@@ -814,10 +814,10 @@ void Runtime::write_saved_frame(const FrameBuffer& f, const PoseRecord& rec, con
     ok = std::fprintf(txt,
                       "format %s\nwidth %d\nheight %d\nstride %zu\nbytes %zu\nname %s\n"
                       "model %s\nisa %s\npose %.9g %.9g %.9g %.9g %.9g %.9g %.9g\nflags %u\n",
-                      kernels::pixel_format_name(f.info.format), f.info.width, f.info.height,
-                      f.info.stride, f.info.bytes, f.info.name, config_.model.c_str(), e.isa(),
-                      p.position[0], p.position[1], p.position[2], p.orientation[0],
-                      p.orientation[1], p.orientation[2], p.orientation[3], p.flags) > 0 &&
+                      pixel_format_name(f.info.format), f.info.width, f.info.height, f.info.stride,
+                      f.info.bytes, f.info.name, config_.model.c_str(), e.isa(), p.position[0],
+                      p.position[1], p.position[2], p.orientation[0], p.orientation[1],
+                      p.orientation[2], p.orientation[3], p.flags) > 0 &&
          ok;
   }
   if (raw) ok = std::fclose(raw) == 0 && ok;

@@ -27,8 +27,8 @@
 
 #include "drivers/frame/frame_slot.h"
 #include "drivers/frame/frame_source.h"
-#include "kernels/common/lidar_input.h"
-#include "kernels/common/preprocess_image.h"
+#include "kernels/preprocess/lidar_input.h"
+#include "kernels/preprocess/preprocess_image.h"
 #include "runtime/config/config.h"
 #include "runtime/engine/engine.h"
 #include "runtime/loop/fault_injector.h"
@@ -198,7 +198,7 @@ class Runtime {
   pthread_t inference_{}, publish_{};
   bool threads_started_[2] = {};
   uint64_t fusion_no_quorum_ = 0;  // inference thread
-  // A LiDAR model's input from a scan (kernels/common/lidar_input.h): the
+  // A LiDAR model's input from a scan (kernels/preprocess/lidar_input.h): the
   // parameters from the model file, scratch for the configured point count.
   kernels::BevInputParams bev_input_{};
   kernels::PointsInputParams points_input_{};

@@ -9,7 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "runtime/common/expected.h"
+#include "runtime/base/expected.h"
 
 namespace aprt {
 

@@ -17,7 +17,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "runtime/common/allocation_counter.h"
+#include "runtime/base/allocation_counter.h"
 #include "runtime/engine/engine.h"
 #include "tests/support/test_files.h"
 

@@ -26,7 +26,7 @@
 #include <vector>
 
 #include "ros2_interfaces.h"
-#include "runtime/common/allocation_counter.h"
+#include "runtime/base/allocation_counter.h"
 #include "runtime/config/config.h"
 #include "runtime/loop/runtime.h"
 #include "tests/support/model_builder.h"

@@ -12,7 +12,7 @@
 #include <iterator>
 #include <string>
 
-#include "runtime/common/allocation_counter.h"
+#include "runtime/base/allocation_counter.h"
 #include "runtime/config/config.h"
 #include "runtime/loop/runtime.h"
 

@@ -3,7 +3,7 @@
 #include <cstring>
 #include <random>
 
-#include "runtime/common/crc32.h"
+#include "runtime/base/crc32.h"
 
 namespace aprt::test {
 namespace {

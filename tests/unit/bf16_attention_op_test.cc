@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "kernels/common/cpu_features.h"
-#include "runtime/common/allocation_counter.h"
+#include "kernels/table/cpu_features.h"
+#include "runtime/base/allocation_counter.h"
 #include "runtime/engine/engine.h"
 #include "tests/support/model_builder.h"
 

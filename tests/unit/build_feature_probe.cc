@@ -2,7 +2,7 @@
 // what aprt's start-up check says, and exits 70 like `aprt` when it refuses.
 #include <cstdio>
 
-#include "kernels/common/cpu_features.h"
+#include "kernels/table/cpu_features.h"
 
 int main() {
   if (const char* missing = aprt::kernels::missing_build_feature()) {

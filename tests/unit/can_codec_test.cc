@@ -12,7 +12,7 @@
 
 #include "drivers/can/dbc.h"
 #include "drivers/can/pose_can_codec.h"
-#include "runtime/common/allocation_counter.h"
+#include "runtime/base/allocation_counter.h"
 
 #ifndef APRT_SOURCE_DIR
 #define APRT_SOURCE_DIR "."

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "drivers/can/pose_can_sender.h"
-#include "runtime/common/allocation_counter.h"
+#include "runtime/base/allocation_counter.h"
 
 namespace aprt::can {
 namespace {

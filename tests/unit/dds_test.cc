@@ -15,7 +15,7 @@
 #include "drivers/dds/dds_publisher.h"
 #include "drivers/dds/pointcloud2_reader.h"
 #include "ros2_interfaces.h"
-#include "runtime/common/allocation_counter.h"
+#include "runtime/base/allocation_counter.h"
 
 namespace aprt {
 namespace {

@@ -7,7 +7,7 @@
 #include <cstring>
 #include <vector>
 
-#include "runtime/common/allocation_counter.h"
+#include "runtime/base/allocation_counter.h"
 #include "tests/support/model_builder.h"
 
 namespace aprt {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/common/allocation_counter.h"
+#include "runtime/base/allocation_counter.h"
 #include "runtime/engine/engine.h"
 #include "tests/support/model_builder.h"
 

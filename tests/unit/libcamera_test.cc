@@ -37,7 +37,7 @@ TEST(Libcamera, RefusesWhatItCannotDeliver) {
   auto m = LibcameraSource::create(o);
   ASSERT_TRUE(m) << m.error().message();
   EXPECT_EQ(m.value()->max_frame_bytes(), size_t(640) * 480 * 3);  // decoded RGB24
-  EXPECT_EQ(m.value()->format(), kernels::PixelFormat::kRgb24);
+  EXPECT_EQ(m.value()->format(), PixelFormat::kRgb24);
 }
 
 TEST(Libcamera, AbsentCameraIsAClearErrorAndRetriedWithBackoff) {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "drivers/lidar/pointcloud2_decode.h"
-#include "runtime/common/allocation_counter.h"
+#include "runtime/base/allocation_counter.h"
 
 namespace aprt {
 namespace {

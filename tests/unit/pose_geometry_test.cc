@@ -7,7 +7,7 @@
 #include <limits>
 #include <random>
 
-#include "runtime/common/allocation_counter.h"
+#include "runtime/base/allocation_counter.h"
 
 namespace aprt {
 namespace {

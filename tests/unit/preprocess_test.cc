@@ -14,20 +14,18 @@
 #include "drivers/lidar/point_cloud.h"
 #include "drivers/lidar/scan_reader.h"
 #include "drivers/replay/image_decoder.h"
-#include "kernels/common/cpu_features.h"
-#include "kernels/common/kernel_set.h"
-#include "kernels/common/lidar_fast.h"
-#include "kernels/common/lidar_input.h"
-#include "kernels/common/preprocess_image.h"
-#include "kernels/ref/lidar__ref.h"
-#include "kernels/ref/preprocess_image__ref.h"
-#include "runtime/common/allocation_counter.h"
+#include "kernels/preprocess/lidar__ref.h"
+#include "kernels/preprocess/lidar_fast.h"
+#include "kernels/preprocess/lidar_input.h"
+#include "kernels/preprocess/preprocess_image.h"
+#include "kernels/preprocess/u8_f32_preprocess__ref.h"
+#include "kernels/table/cpu_features.h"
+#include "kernels/table/kernel_table.h"
+#include "runtime/base/allocation_counter.h"
 #include "tests/support/test_files.h"
 
 namespace aprt {
 namespace {
-
-using kernels::PixelFormat;
 
 PixelFormat parse_format(const std::string& s) {
   if (s == "RGB24") return PixelFormat::kRgb24;
@@ -58,25 +56,22 @@ TEST(Preprocess, MatchesTheTrainingTransformForEveryFormat) {
     const auto raw = test::read_bytes(dir + "/" + name + ".raw");
     const auto want = test::read_f32(dir + "/" + name + ".f32");
     const PixelFormat f = parse_format(fmt);
-    ASSERT_EQ(raw.size(), kernels::frame_bytes(f, w, h)) << name;
-    const kernels::ImageView img{raw.data(), f, w, h, stride};
+    ASSERT_EQ(raw.size(), frame_bytes(f, w, h)) << name;
+    const ImageView img{raw.data(), f, w, h, stride};
     std::vector<float> got(want.size()), ref(want.size());
     ASSERT_TRUE(kernels::plan_preprocess(imagenet(size), f, w, h, plan.get())) << name;
     const AllocationScope allocs;
     kernels::preprocess_image(*plan, img, got.data());
     EXPECT_EQ(allocs.count(), 0u);
-    kernels::preprocess_image__ref(img, imagenet(size), ref.data());
+    kernels::u8_f32_preprocess__ref(img, imagenet(size), ref.data());
     for (size_t i = 0; i < want.size(); ++i) {
       ASSERT_NEAR(got[i], want[i], 2e-5) << name << " at " << i;
       ASSERT_EQ(got[i], ref[i]) << name << " at " << i;  // same arithmetic, bit for bit
     }
     // The ISA kernels this CPU runs, against the same Python transform.
-    const kernels::CpuFeatures& cpu = kernels::cpu_features();
-    const kernels::KernelSet* sets[] = {cpu.avx512 ? kernels::kernel_set_avx512() : nullptr,
-                                        cpu.avx2_fma ? kernels::kernel_set_avx2() : nullptr,
-                                        cpu.neon ? kernels::kernel_set_neon() : nullptr};
-    for (const kernels::KernelSet* ks : sets) {
-      if (!ks) continue;
+    for (const kernels::IsaParts& p : kernels::isa_parts()) {
+      if (!p.f32_runs) continue;
+      const kernels::KernelSet* ks = p.f32;
       auto fast = std::make_unique<kernels::PreprocessPlan>();
       ASSERT_TRUE(kernels::plan_preprocess(imagenet(size), f, w, h, fast.get(), ks->preprocess));
       const AllocationScope fast_allocs;

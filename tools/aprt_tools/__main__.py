@@ -160,7 +160,8 @@ def cmd_train(a):
                            seed=a.seed, threads=a.threads, hidden=a.hidden, layers=a.layers,
                            modality=a.modality, config=preset, inputs=a.inputs,
                            inputs_every=a.inputs_every, val=a.val, augment_from=a.augment_from,
-                           init=a.init, workers=a.workers)
+                           init=a.init, workers=a.workers, uncertainty=a.uncertainty,
+                           ema=a.ema)
     except (OSError, ValueError) as e:
         print(f"train: {e}", file=sys.stderr)
         sys.exit(2)
@@ -285,8 +286,14 @@ def main(argv=None):
                    help="folder(s) with poses.txt and the images; several drives train together")
     t.add_argument("--val", help="a separate drive for the validation error (default: a "
                                  "contiguous tenth of the first --data held out)")
-    t.add_argument("--init", help="a checkpoint.pth of an earlier run: continue from its weights "
-                                  "(its configuration and position bounds; new schedule)")
+    t.add_argument("--init", help="a checkpoint.pth of an earlier run, or a model file (.aprt, "
+                                  "fp32) converted from one: continue from its weights (its "
+                                  "configuration and position bounds; new schedule)")
+    t.add_argument("--uncertainty", action="store_true",
+                   help="add the per-pose confidence heads (log error scales, outputs 7..12)")
+    t.add_argument("--ema", type=float, default=0.0,
+                   help="average the weights with this decay per step (e.g. 0.999) and ship "
+                        "the average (default 0: the weights as trained)")
     t.add_argument("--augment-from", type=float, default=0.3,
                    help="fraction of the budget before colour augmentation ramps in (image)")
     t.add_argument("--out", required=True)

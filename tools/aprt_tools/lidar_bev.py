@@ -1,6 +1,6 @@
 """The LiDAR bird's-eye histogram (DESIGN.md 4.2), as the network is trained
-with it -- and as the runtime's kernels compute it (kernels/ref/lidar__ref.cc,
-kernels/common/lidar_types.h; docs/lidar.md): grid x grid cells of cell_m from
+with it -- and as the runtime's kernels compute it (kernels/preprocess/lidar__ref.cc,
+runtime/base/lidar_point.h; docs/lidar.md): grid x grid cells of cell_m from
 (x_min, y_min), row along x, column along y, channel 0 counts points with
 z < height_threshold_m, channel 1 the rest; counts clipped to clip_count and
 divided by it; NHWC [grid][grid][2]; points off the grid ignored.

@@ -1,5 +1,5 @@
 """The raw-points input (DESIGN.md 4.3), as the network is trained with it --
-and as the runtime computes it (kernels/ref/lidar__ref.cc, lidar_points_features;
+and as the runtime computes it (kernels/preprocess/lidar__ref.cc, lidar_points_features;
 docs/lidar.md):
 
 1. crop: keep points with x*x + y*y <= r*r (float32), in scan order;

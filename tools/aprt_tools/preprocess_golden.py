@@ -4,7 +4,7 @@ them, for the runtime's preprocessing tests (tests/unit/preprocess_test.cc).
 For each case: <case>.raw (the frame bytes), <case>.f32 (expected NHWC input
 tensor), and a line in cases.txt: "case format width height stride size".
 YUV frames are converted to RGB with the integer BT.601 formula of
-kernels/common/image_types.h before the transform, exactly as the runtime does.
+runtime/base/image.h before the transform, exactly as the runtime does.
 Also writes rgb.png, whose expected tensor is png.f32 (decoder + transform),
 and LiDAR scans with the BEV histogram the training uses (lidar_bev.py):
 bev_<k>.bin (KITTI), bev_<k>.f32, and a line in bev.txt:

@@ -43,15 +43,46 @@ class PoseLoss(nn.Module):
 
     def forward(self, pred, pos_gt, q_gt):
         l_p = (pred[:, :3] - pos_gt).abs().sum(dim=1).mean()
-        q = F.normalize(pred[:, 3:], dim=1)
+        raw_q = pred[:, 3:7]
+        q = F.normalize(raw_q, dim=1)
         l_q = torch.minimum((q - q_gt).abs().sum(dim=1), (q + q_gt).abs().sum(dim=1)).mean()
         loss = l_p * torch.exp(-self.s_x) + self.s_x + l_q * torch.exp(-self.s_q) + self.s_q
         # Keep the raw quaternion near unit length: the runtime's sanity check
         # flags |q| outside [0.5, 2] as an output the network was not trained
         # to give (runtime/pose/pose_decode.cc); without this term the norm
         # drifts freely, as the loss above only sees the normalised q.
-        loss = loss + self.norm_weight * ((pred[:, 3:].norm(dim=1) - 1.0) ** 2).mean()
+        loss = loss + self.norm_weight * ((raw_q.norm(dim=1) - 1.0) ** 2).mean()
+        if pred.shape[1] == 13:
+            loss = loss + uncertainty_nll(pred, pos_gt, q_gt)
         return loss, l_p.detach(), l_q.detach()
+
+
+def rotation_error_vector(q_pred: torch.Tensor, q_gt: torch.Tensor) -> torch.Tensor:
+    """(N, 3) rotation taking the true camera orientation to the predicted one,
+    as an axis-angle vector in the camera frame (x forward, y left, z up: z is
+    about yaw): 2 atan2(|v|, w) v / |v| of conj(q_gt) * q_pred, sign-free."""
+    q = F.normalize(q_pred, dim=1)
+    w1, v1 = q_gt[:, :1], q_gt[:, 1:]
+    w2, v2 = q[:, :1], q[:, 1:]
+    w = w1 * w2 + (v1 * v2).sum(dim=1, keepdim=True)
+    v = w1 * v2 - w2 * v1 - torch.cross(v1, v2, dim=1)
+    sign = torch.where(w < 0, -1.0, 1.0)
+    w, v = w * sign, v * sign
+    n = v.norm(dim=1, keepdim=True).clamp(min=1e-12)
+    return v / n * 2 * torch.atan2(n, w)
+
+
+def uncertainty_nll(pred, pos_gt, q_gt) -> torch.Tensor:
+    """Laplace negative log-likelihood of the pose's errors under the
+    confidence heads' scales b = exp(s): |e| / b + s per axis. The errors are
+    detached: the heads learn how wrong the pose is, and never make it
+    worse to look certain (Kendall & Gal 2017's heteroscedastic loss, with the
+    mean held fixed)."""
+    e_pos = (pred[:, :3] - pos_gt).detach().abs()
+    e_rot = rotation_error_vector(pred[:, 3:7].detach(), q_gt).abs()
+    s = pred[:, 7:13].clamp(-14.0, 6.0)
+    e = torch.cat([e_pos, e_rot], dim=1)
+    return (e * torch.exp(-s) + s).sum(dim=1).mean() * 0.1
 
 
 def load_sequence(folder: str, size: int):
@@ -162,7 +193,7 @@ def evaluate(model, imgs, pos, quat, lo, hi, batch=32, mean=None, std=None):
         p = y[:, :3] * (hi - lo) + lo
         for k in range(len(p)):
             pe.append(float(torch.norm(p[k] - pos[i + k])))
-            oe.append(orientation_error_deg(y[k, 3:].numpy(), quat[i + k].numpy()))
+            oe.append(orientation_error_deg(y[k, 3:7].numpy(), quat[i + k].numpy()))
     model.train()
     return np.array(pe), np.array(oe)
 
@@ -186,17 +217,23 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
           lr: float = 1e-4, seed: int = 1, threads: int = 2, hidden: int = 128, layers: int = 3,
           warmup_steps: int = 200, modality: str = "image", config: AprConfig | None = None,
           inputs: str | None = None, inputs_every: int = 1, val: str | None = None,
-          augment_from: float = 0.3, init: str | None = None, workers: int = 1, log=print):
+          augment_from: float = 0.3, init: str | None = None, workers: int = 1,
+          uncertainty: bool = False, ema: float = 0.0, log=print):
     """data: one sequence folder or a list of them (several drives, e.g. under
     different light), trained on together. val: a separate drive whose errors
     are reported each epoch and recorded as the model's `val_error`; without
     it a contiguous tenth of the (first) route is held out instead.
     augment_from: the fraction of the budget before colour augmentation starts
     ramping in (it reaches full strength 0.4 later).
-    init: a checkpoint.pth this trainer wrote; training continues from its
-    weights and learned loss weights, with its configuration and position
+    init: a checkpoint.pth this trainer wrote, or a model file (.aprt, fp32)
+    converted from one; training continues from its weights (and a
+    checkpoint's learned loss weights), with its configuration and position
     bounds (a second phase, or fine-tuning on new drives). The learning-rate
     schedule and the augmentation curriculum start again over `minutes`.
+    uncertainty: add the confidence heads (AprConfig.uncertainty) if the
+    configuration has none; they learn the pose's error scales (uncertainty_nll).
+    ema: keep an exponential moving average of the weights with this decay per
+    step (e.g. 0.999) and evaluate, save and export it; 0: the weights as trained.
     workers: data-parallel processes sharing `threads` (the batch is split
     between them); 2 with threads 2 is the fastest on two cores.
 
@@ -219,9 +256,7 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     if init is not None:
         if config is not None:
             raise ValueError("give either a configuration or a checkpoint to start from, not both")
-        checkpoint = torch.load(init, map_location="cpu")
-        if not isinstance(checkpoint, dict) or "model_state_dict" not in checkpoint:
-            raise ValueError(f"{init}: not a checkpoint written by aprt_tools train")
+        checkpoint = _load_init(init, log)
         config = AprConfig.from_json(json.dumps(checkpoint["config"]))
     if config is not None:
         cfg = AprConfig.from_json(config.to_json())
@@ -261,14 +296,23 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
         cfg.enc_layers = cfg.dec_layers = layers
     cfg.dropout = 0.0  # the augmentation regularises; dropout slowed the start further
     cfg.pose_min, cfg.pose_max = tuple(lo.tolist()), tuple(hi.tolist())
+    had_heads = cfg.uncertainty
+    cfg.uncertainty = cfg.uncertainty or uncertainty
     model = AprTransformer(cfg)
     loss_fn = PoseLoss()
     if checkpoint is not None:
-        model.load_state_dict(checkpoint["model_state_dict"])
+        state = checkpoint["model_state_dict"]
+        if "bn_frames" in checkpoint:  # a model file: its BatchNorm re-estimated on these frames
+            state = _model_file_state(checkpoint, imgs[tr], cfg, log)
+        missing, unexpected = model.load_state_dict(state, strict=False)
+        if unexpected or any(not (k.startswith("uncertainty_head") and not had_heads)
+                             for k in missing):
+            raise ValueError(f"{init}: weights do not fit the network (missing {missing[:3]}, "
+                             f"unexpected {unexpected[:3]})")
         loss_fn = PoseLoss(checkpoint.get("s_x", -3.0), checkpoint.get("s_q", -3.0))
-        log(f"train: continuing from {init}")
+        log(f"train: continuing from {init}" + (" (new confidence heads)" if missing else ""))
     pos_n = (pos - lo) / (hi - lo)
-    plan = dict(cfg=cfg.to_json(), lo=lo, hi=hi, lr=lr, batch=batch, seed=seed,
+    plan = dict(cfg=cfg.to_json(), lo=lo, hi=hi, lr=lr, batch=batch, seed=seed, ema=ema,
                 warmup_steps=warmup_steps, budget=minutes * 60.0, augment_from=augment_from,
                 modality=modality, out=out, folders=folders, val=val, tr=tr,
                 threads=max(1, threads // workers))
@@ -277,10 +321,50 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
         _fit(0, 1, plan, data, model, loss_fn, log)
     else:
         _fit_in_workers(workers, plan, data, model, loss_fn)
-        final = torch.load(os.path.join(out, "checkpoint.pth"), map_location="cpu")
-        model.load_state_dict(final["model_state_dict"])
+    # What the last epoch saved: the weights, or their average with --ema.
+    final = torch.load(os.path.join(out, "checkpoint.pth"), map_location="cpu")
+    model.load_state_dict(final["model_state_dict"])
     cfg.dropout = 0.0
     return model, cfg
+
+
+def _load_init(init: str, log) -> dict:
+    """A checkpoint this trainer wrote, or a model file (read back with
+    model_bin.to_torch; its BatchNorm is re-estimated on training frames
+    once they are loaded: see _model_file_state)."""
+    with open(init, "rb") as f:
+        head = f.read(8)
+    if head == b"APRTMDL\x00":
+        from .model_bin import reader
+        from .model_bin.to_torch import config_of
+
+        data = open(init, "rb").read()
+        _, meta = reader.read(data)
+        cfg = config_of(meta)
+        log(f"train: starting from the model file {init}")
+        return {"model_state_dict": None, "config": json.loads(cfg.to_json()), "bn_frames": True,
+                "model_file": data}
+    checkpoint = torch.load(init, map_location="cpu")
+    if not isinstance(checkpoint, dict) or "model_state_dict" not in checkpoint:
+        raise ValueError(f"{init}: neither a checkpoint written by aprt_tools train nor a model "
+                         "file")
+    return checkpoint
+
+
+def _model_file_state(checkpoint: dict, frames: torch.Tensor, cfg, log) -> dict:
+    """The model file's network, its BatchNorm statistics estimated on 64 of
+    the training frames; checked against the file's own graph."""
+    from .model_bin import to_torch
+
+    pick = torch.linspace(0, len(frames) - 1, 64).long()
+    x = network_input(frames[pick], cfg)
+    model, _ = to_torch.load(checkpoint["model_file"], x)
+    worst = to_torch.check(checkpoint["model_file"], model, x[:4])
+    if worst > 1e-3:
+        raise ValueError(f"the model file read back differs from its graph by {worst:.2g} "
+                         "(relative): not continuing from a different network")
+    log(f"train: model file read back (largest relative difference {worst:.1e})")
+    return model.state_dict()
 
 
 class _Objective(nn.Module):
@@ -349,6 +433,12 @@ def _fit(rank: int, world: int, plan: dict, data: tuple, model, loss_fn, log):
         # checkpoint keys) but never runs them: their parameters get no gradient.
         objective = nn.parallel.DistributedDataParallel(objective, find_unused_parameters=True)
     opt = torch.optim.AdamW(objective.parameters(), lr=lr, weight_decay=1e-4)
+    averaged = None
+    if plan.get("ema") and rank == 0:  # every worker holds the same weights: one average
+        import copy
+
+        averaged = copy.deepcopy(model)
+        averaged.eval()
     perm_gen = torch.Generator().manual_seed(plan["seed"])  # the same order in every worker
     aug_gen = torch.Generator().manual_seed(plan["seed"] + 1 + rank)
     start = time.time()
@@ -392,20 +482,28 @@ def _fit(rank: int, world: int, plan: dict, data: tuple, model, loss_fn, log):
             nn.utils.clip_grad_norm_(model.parameters(), 2.0)
             opt.step()
             step += 1
+            if averaged is not None:
+                _ema_update(averaged, model, plan["ema"], step)
             if step % 50 == 0 and rank == 0:
                 log(f"train: epoch {epoch} step {step} loss {loss.item():.3f} pos {lp.item():.4f} "
                     f"quat {lq.item():.4f} s_x {loss_fn.s_x.item():.2f} s_q {loss_fn.s_q.item():.2f} "
                     f"{(time.time() - start) / 60:.1f} min")
         if rank == 0:
-            pe, oe = evaluate(model, v_imgs, v_pos, v_quat, lo, hi, mean=cfg.mean, std=cfg.std)
+            shipped = averaged if averaged is not None else model
+            pe, oe = evaluate(shipped, v_imgs, v_pos, v_quat, lo, hi, mean=cfg.mean, std=cfg.std)
             row = dict(epoch=epoch, step=step, minutes=(time.time() - start) / 60,
                        val_pos_median=float(np.median(pe)), val_rot_median=float(np.median(oe)))
             log_rows.append(row)
             log(f"train: epoch {epoch} done: validation median {row['val_pos_median']:.2f} m, "
                 f"{row['val_rot_median']:.2f} deg")
-            torch.save({"model_state_dict": model.state_dict(), "config": json.loads(cfg.to_json()),
-                        "s_x": loss_fn.s_x.item(), "s_q": loss_fn.s_q.item()},
-                       os.path.join(out, "checkpoint.pth"))
+            row["val_pos_p90"] = float(np.percentile(pe, 90))
+            row["val_share_over_10m"] = float(np.mean(pe > 10.0))
+            saved = {"model_state_dict": shipped.state_dict(), "config": json.loads(cfg.to_json()),
+                     "s_x": loss_fn.s_x.item(), "s_q": loss_fn.s_q.item()}
+            if averaged is not None:  # to continue training from the weights as trained
+                saved["train_state_dict"] = model.state_dict()
+            torch.save(saved, os.path.join(out, "checkpoint.pth.tmp"))
+            os.replace(os.path.join(out, "checkpoint.pth.tmp"), os.path.join(out, "checkpoint.pth"))
             # Written every epoch: an interrupted run is still exportable
             # (python3 -m aprt_tools export --config-json OUT/model.json --weights
             # OUT/checkpoint.pth -o OUT/model.onnx, then convert).
@@ -418,6 +516,18 @@ def _fit(rank: int, world: int, plan: dict, data: tuple, model, loss_fn, log):
         dist.all_gather(gathered, sums)
         if any(not torch.equal(g, gathered[0]) for g in gathered):
             raise RuntimeError("train: the workers' weights diverged")
+
+
+@torch.no_grad()
+def _ema_update(averaged: nn.Module, model: nn.Module, decay: float, step: int):
+    """Polyak averaging; the decay ramps up over the first steps so that the
+    average starts from the weights, not from their initial values.
+    BatchNorm's running statistics are copied (they are averages already)."""
+    d = min(decay, (1.0 + step) / (10.0 + step))
+    for a, p in zip(averaged.parameters(), model.parameters()):
+        a.mul_(d).add_(p.detach(), alpha=1.0 - d)
+    for a, b in zip(averaged.buffers(), model.buffers()):
+        a.copy_(b)
 
 
 def _write_config(out, cfg, log_rows, start, tr, epoch, step, folders, val):

@@ -2,7 +2,7 @@
 
 #include <chrono>
 
-#include "kernels/common/cpu_features.h"
+#include "kernels/table/cpu_features.h"
 
 namespace aprt::bench {
 

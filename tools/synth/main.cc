@@ -3,9 +3,11 @@
 //   aprt_synth --out DIR [--split train|test] [--town-seed N] [--route-seed N]
 //              [--frames N] [--width 256 --height 192 --hfov 90]
 //              [--lighting day|overcast|morning|noon|haze|dusk] [--lane-jitter M]
-//              [--camera-mount X,Y,Z,PITCH_DEG] [--threads N]
-//              [--lidar] [--beams 32] [--azimuths 1024] [--lidar-range 80]
-//              [--lidar-noise 0.02] [--lidar-mount X,Y,Z]
+//              [--camera-mount X,Y,Z,PITCH_DEG] [--view-jitter LAT,HEIGHT,PITCH,YAW]
+//              [--threads N] [--lidar] [--beams 32] [--azimuths 1024]
+//              [--lidar-range 80] [--lidar-noise 0.02] [--lidar-mount X,Y,Z]
+//
+// `aprt_synth --help` lists every option with its default.
 //
 // Writes the DeepLoc layout: DIR/poses.txt ("name x y z qw qx qy qz", the
 // camera's pose in the map frame), DIR/images/NNNNNN.png, with --lidar
@@ -60,7 +62,35 @@ struct Options {
   // Mounting on base_link (x forward, y left, z up), metres and degrees.
   double cam_x = 1.2, cam_y = 0.0, cam_z = 1.55, cam_pitch_deg = 3.0;
   double lidar_x = 0.0, lidar_y = 0.0, lidar_z = 1.9;
+  // Per-frame view perturbation (novel views around the route, LENS-style
+  // coverage): each frame draws uniformly within +-these a lateral offset of
+  // the vehicle across its heading (m), a camera height change (m), a camera
+  // pitch change and a vehicle yaw change (degrees). 0: the route's own views.
+  double jitter_lateral = 0, jitter_height = 0, jitter_pitch_deg = 0, jitter_yaw_deg = 0;
+  bool progress = true;
 };
+
+// The frame's view perturbation, a pure function of the route seed and the
+// frame index (the same arguments give the same files, whatever the threads).
+struct ViewJitter {
+  double lateral = 0, height = 0, pitch = 0, yaw = 0;  // m, m, rad, rad
+};
+
+ViewJitter view_jitter(const Options& o, size_t frame) {
+  if (o.jitter_lateral == 0 && o.jitter_height == 0 && o.jitter_pitch_deg == 0 &&
+      o.jitter_yaw_deg == 0) {
+    return {};
+  }
+  std::mt19937 rng(o.route_seed * 2654435761u ^ uint32_t(frame * 40503u + 977u));
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  constexpr double kDeg = 3.14159265358979323846 / 180;
+  ViewJitter j;
+  j.lateral = o.jitter_lateral * u(rng);
+  j.height = o.jitter_height * u(rng);
+  j.pitch = o.jitter_pitch_deg * kDeg * u(rng);
+  j.yaw = o.jitter_yaw_deg * kDeg * u(rng);
+  return j;
+}
 
 struct Quat {
   double w, x, y, z;
@@ -164,16 +194,47 @@ bool make_dirs(const std::string& path) {
 }
 
 int usage() {
-  std::fprintf(stderr,
-               "usage: aprt_synth --out DIR [--split train|test] [--town-seed N] [--route-seed N]\n"
-               "                  [--frames N] [--max-length M] [--spacing M] [--width W] "
-               "[--height H] [--hfov DEG]\n"
-               "                  [--lighting %s] [--lane-jitter M] [--threads N]\n"
-               "                  [--camera-mount X,Y,Z,PITCH_DEG] [--lidar] [--beams N] "
-               "[--azimuths N]\n"
-               "                  [--lidar-range M] [--lidar-noise M] [--lidar-mount X,Y,Z]\n",
-               kLightingNames);
+  std::fprintf(stderr, "usage: aprt_synth --out DIR [options]   (aprt_synth --help lists them)\n");
   return 2;
+}
+
+int help() {
+  const Options d;
+  std::printf(
+      "aprt_synth: renders a drive through the procedural town (DeepLoc layout).\n"
+      "\n"
+      "  --out DIR              where poses.txt, images/, dataset.json go (required)\n"
+      "  --split train|test     train: a route over every street in both directions;\n"
+      "                         test: a random drive (give --max-length) [%s]\n"
+      "  --town-seed N          the town (every shipped drive uses town 1) [%u]\n"
+      "  --route-seed N         the route's turns and lane weaving phase [%u]\n"
+      "  --frames N             stop after N frames (0: the whole route) [%d]\n"
+      "  --max-length M         stop after M metres of route [unbounded]\n"
+      "  --spacing M            metres between frames [%.1f]\n"
+      "  --lane-jitter M        slow lateral weaving in the lane [train 0.5, test 0.7]\n"
+      "  --view-jitter L,H,P,Y  per-frame random view: lateral offset +-L m, camera height\n"
+      "                         +-H m, pitch +-P deg, yaw +-Y deg [0,0,0,0]\n"
+      "  --lighting NAME        %s [%s]\n"
+      "  --width W --height H --hfov DEG   the pinhole camera [%d x %d, %.0f deg]\n"
+      "  --camera-mount X,Y,Z,PITCH_DEG    camera on base_link [%.2f,%.2f,%.2f,%.1f]\n"
+      "  --lidar                also ray-cast LiDAR scans (KITTI .bin) of the same poses\n"
+      "  --beams N --azimuths N --lidar-range M --lidar-noise M   [%d, %d, %.0f m, %.2f m]\n"
+      "  --lidar-mount X,Y,Z    LiDAR on base_link [%.2f,%.2f,%.2f]\n"
+      "  --threads N            rendering threads [%d]\n"
+      "  --quiet                no progress lines on stderr\n"
+      "\n"
+      "The shipped model's data (tools/synth/town_drives.sh, docs/evaluation.md):\n"
+      "  training    route seeds 1-4 (split train) under day, overcast, morning, noon,\n"
+      "              and seeds 5, 6, 8, 9 with --view-jitter under the same four lights\n"
+      "  validation  route seed 11, haze, 600 m (chooses; never trained on)\n"
+      "  test        route seed 7, dusk, 600 m (data/demo_drive), and the unseen routes\n"
+      "              21 (noon), 22 (dusk), 23 (haze), 600 m: looked at once per model\n"
+      "haze and dusk light no training drive.\n",
+      d.split.c_str(), d.town_seed, d.route_seed, d.frames, d.spacing, kLightingNames,
+      d.lighting.c_str(), d.width, d.height, d.hfov_deg, d.cam_x, d.cam_y, d.cam_z, d.cam_pitch_deg,
+      d.beams, d.azimuths, d.lidar_range, d.lidar_noise, d.lidar_x, d.lidar_y, d.lidar_z,
+      d.threads);
+  return 0;
 }
 
 int run(int argc, char** argv) {
@@ -182,8 +243,13 @@ int run(int argc, char** argv) {
     const std::string a = argv[i];
     auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
     const char* v = nullptr;
+    if (a == "--help" || a == "-h") return help();
     if (a == "--lidar") {
       o.lidar = true;
+      continue;
+    }
+    if (a == "--quiet") {
+      o.progress = false;
       continue;
     }
     if (!(v = next())) return usage();
@@ -257,12 +323,16 @@ int run(int argc, char** argv) {
       real(&o.lidar_noise);
     else if (a == "--camera-mount")
       reals({&o.cam_x, &o.cam_y, &o.cam_z, &o.cam_pitch_deg});
+    else if (a == "--view-jitter")
+      reals({&o.jitter_lateral, &o.jitter_height, &o.jitter_pitch_deg, &o.jitter_yaw_deg});
     else if (a == "--lidar-mount")
       reals({&o.lidar_x, &o.lidar_y, &o.lidar_z});
     else if (a == "--threads")
       integer(&o.threads);
-    else
+    else {
+      std::fprintf(stderr, "aprt_synth: unknown option '%s'\n", a.c_str());
       return usage();
+    }
     if (!number_ok) {
       std::fprintf(stderr, "aprt_synth: %s '%s' is not %s\n", a.c_str(), v, expected.c_str());
       return 2;
@@ -285,6 +355,15 @@ int run(int argc, char** argv) {
                  "aprt_synth: unknown split '%s' (train: every street both ways; test: "
                  "a random drive)\n",
                  o.split.c_str());
+    return 2;
+  }
+  if (o.jitter_lateral < 0 || o.jitter_lateral > 2.0 || o.jitter_height < 0 ||
+      o.jitter_height > 1.0 || o.jitter_pitch_deg < 0 || o.jitter_pitch_deg > 20 ||
+      o.jitter_yaw_deg < 0 || o.jitter_yaw_deg > 45) {
+    std::fprintf(stderr,
+                 "aprt_synth: --view-jitter %g,%g,%g,%g out of range (lateral 0..2 m keeps the "
+                 "camera on the road, height 0..1 m, pitch 0..20 deg, yaw 0..45 deg)\n",
+                 o.jitter_lateral, o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg);
     return 2;
   }
   if (o.lane_jitter > 2.0) {
@@ -317,11 +396,15 @@ int run(int argc, char** argv) {
     std::vector<uint8_t> rgb;
     char name[64];
     for (size_t k = size_t(t); k < path.size(); k += size_t(o.threads)) {
-      const VehiclePose& vp = path[k];
+      const VehiclePose& route = path[k];
+      const ViewJitter j = view_jitter(o, k);
+      // The vehicle moved across its heading (left positive) and turned.
+      const VehiclePose vp{route.x - std::sin(route.yaw) * j.lateral,
+                           route.y + std::cos(route.yaw) * j.lateral, route.yaw + j.yaw};
       const Quat qv = yaw_pitch(vp.yaw, 0.0);
       const Vec3 base{vp.x, vp.y, 0.0};
-      const Vec3 eye = base + rotate(qv, {o.cam_x, o.cam_y, o.cam_z});
-      const Quat qc = yaw_pitch(vp.yaw, pitch);
+      const Vec3 eye = base + rotate(qv, {o.cam_x, o.cam_y, o.cam_z + j.height});
+      const Quat qc = yaw_pitch(vp.yaw, pitch + j.pitch);
       render_image(scene, o, L, eye, qc, &rgb);
       std::snprintf(name, sizeof name, "images/%06zu.png", k);
       if (!write_png(o.out + "/" + name, o.width, o.height, rgb)) failed[size_t(t)]++;
@@ -339,6 +422,9 @@ int run(int argc, char** argv) {
         std::snprintf(line, sizeof line, "%s %.4f %.4f %.4f %.6f %.6f %.6f %.6f", name, origin.x,
                       origin.y, origin.z, qv.w, qv.x, qv.y, qv.z);
         lidar_lines[k] = line;
+      }
+      if (t == 0 && o.progress && (k / size_t(o.threads)) % 500 == 499) {
+        std::fprintf(stderr, "aprt_synth: %zu / %zu frames\n", k + 1, path.size());
       }
     }
   };
@@ -368,21 +454,39 @@ int run(int argc, char** argv) {
   }
   FILE* j = std::fopen((o.out + "/dataset.json").c_str(), "w");
   if (!j) return 1;
+  // Every generation parameter: the drive can be made again from this file alone
+  // (the "command" line repeats it as arguments).
   const double f = (o.width / 2.0) / std::tan(o.hfov_deg * kPi / 360.0);
+  char maxlen[32];
+  std::snprintf(maxlen, sizeof maxlen, o.max_length >= 1e9 ? "null" : "%.3f", o.max_length);
   std::fprintf(
       j,
       "{\"generator\": \"aprt_synth\", \"split\": \"%s\", \"lighting\": \"%s\", "
       "\"town_seed\": %u, \"route_seed\": %u, \"frames\": %zu,\n"
+      " \"frames_limit\": %d, \"max_length_m\": %s, \"spacing_m\": %.4f,\n"
       " \"camera\": {\"width\": %d, \"height\": %d, \"fx\": %.4f, \"fy\": %.4f, "
-      "\"cx\": %.2f, \"cy\": %.2f, \"hfov_deg\": %.2f},\n"
-      " \"camera_to_base_link\": {\"xyz\": [%.3f, %.3f, %.3f], \"rpy_deg\": [0, %.3f, 0]},\n"
-      " \"lidar_to_base_link\": {\"xyz\": [%.3f, %.3f, %.3f], \"rpy_deg\": [0, 0, 0]},\n"
-      " \"town_extent_m\": %.1f, \"lane_jitter_m\": %.2f, \"lidar\": %s, \"beams\": %d,\n"
-      " \"azimuths\": %d, \"lidar_range_m\": %.1f, \"lidar_noise_m\": %.3f}\n",
-      o.split.c_str(), o.lighting.c_str(), o.town_seed, o.route_seed, path.size(), o.width,
-      o.height, f, f, o.width / 2.0 - 0.5, o.height / 2.0 - 0.5, o.hfov_deg, o.cam_x, o.cam_y,
-      o.cam_z, o.cam_pitch_deg, o.lidar_x, o.lidar_y, o.lidar_z, town.extent, ro.lane_jitter,
-      o.lidar ? "true" : "false", o.beams, o.azimuths, o.lidar_range, o.lidar_noise);
+      "\"cx\": %.2f, \"cy\": %.2f, \"hfov_deg\": %.4f},\n"
+      " \"camera_to_base_link\": {\"xyz\": [%.4f, %.4f, %.4f], \"rpy_deg\": [0, %.4f, 0]},\n"
+      " \"lidar_to_base_link\": {\"xyz\": [%.4f, %.4f, %.4f], \"rpy_deg\": [0, 0, 0]},\n"
+      " \"view_jitter\": {\"lateral_m\": %.4f, \"height_m\": %.4f, \"pitch_deg\": %.4f, "
+      "\"yaw_deg\": %.4f},\n"
+      " \"town_extent_m\": %.1f, \"lane_jitter_m\": %.4f, \"lidar\": %s, \"beams\": %d,\n"
+      " \"azimuths\": %d, \"lidar_range_m\": %.4f, \"lidar_noise_m\": %.4f,\n"
+      " \"command\": \"aprt_synth --split %s --lighting %s --town-seed %u --route-seed %u "
+      "--frames %d%s%s --spacing %g --lane-jitter %g --view-jitter %g,%g,%g,%g --width %d "
+      "--height %d --hfov %g --camera-mount %g,%g,%g,%g%s --beams %d --azimuths %d "
+      "--lidar-range %g --lidar-noise %g --lidar-mount %g,%g,%g\"}\n",
+      o.split.c_str(), o.lighting.c_str(), o.town_seed, o.route_seed, path.size(), o.frames, maxlen,
+      o.spacing, o.width, o.height, f, f, o.width / 2.0 - 0.5, o.height / 2.0 - 0.5, o.hfov_deg,
+      o.cam_x, o.cam_y, o.cam_z, o.cam_pitch_deg, o.lidar_x, o.lidar_y, o.lidar_z, o.jitter_lateral,
+      o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg, town.extent, ro.lane_jitter,
+      o.lidar ? "true" : "false", o.beams, o.azimuths, o.lidar_range, o.lidar_noise,
+      o.split.c_str(), o.lighting.c_str(), o.town_seed, o.route_seed, o.frames,
+      o.max_length >= 1e9 ? "" : " --max-length ", o.max_length >= 1e9 ? "" : maxlen, o.spacing,
+      ro.lane_jitter, o.jitter_lateral, o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg,
+      o.width, o.height, o.hfov_deg, o.cam_x, o.cam_y, o.cam_z, o.cam_pitch_deg,
+      o.lidar ? " --lidar" : "", o.beams, o.azimuths, o.lidar_range, o.lidar_noise, o.lidar_x,
+      o.lidar_y, o.lidar_z);
   std::fclose(j);
   std::printf("aprt_synth: %zu frames (%s, %s) -> %s\n", path.size(), o.split.c_str(),
               o.lighting.c_str(), o.out.c_str());

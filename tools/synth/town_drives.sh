@@ -3,18 +3,41 @@
 # tested on (docs/evaluation.md), rendered into OUT:
 #   train_day, train_overcast, train_morning, train_noon  every street both ways,
 #       each a different route (seed), lane weaving and light       (~28 600 frames)
+#   train_jitter_{day,overcast,morning,noon}  four more such routes (seeds 5, 6, 8, 9)
+#       whose every frame is a perturbed view: +-1.5 m across the lane, camera
+#       +-0.3 m in height, +-3 deg in pitch, +-10 deg in yaw        (~28 600 frames)
 #   val_haze   a separate 600 m drive under a light no training drive has (validation)
 #   test_dusk  the test drive: 600 m, route seed 7, dusk — the light and the route
 #       are in neither set above; identical to the committed data/demo_drive
-# Deterministic; ~6 minutes on two cores, ~400 MB.
-#   tools/synth/town_drives.sh OUT [path/to/aprt_synth]
+#   test_route21_noon, test_route22_dusk, test_route23_haze  unseen routes (600 m)
+#   test_mount_high  unseen route 24 by day, the camera mounted 0.25 m higher
+# Test drives are looked at once per shipped model; choices use val_haze.
+# Deterministic; ~15 minutes on two cores, ~900 MB.
+#   tools/synth/town_drives.sh OUT [path/to/aprt_synth] [--only NAME]
 set -euo pipefail
-out="${1:?usage: town_drives.sh OUT [aprt_synth]}"
+out="${1:?usage: town_drives.sh OUT [aprt_synth] [--only NAME]}"
 synth="${2:-$(dirname "$0")/../../build/release/bin/aprt_synth}"
+only="${4:-}"
 [ -x "$synth" ] || { echo "town_drives: no aprt_synth at $synth (build the release preset)" >&2; exit 2; }
-"$synth" --out "$out/train_day" --split train --route-seed 1 --lighting day --lane-jitter 0.5
-"$synth" --out "$out/train_overcast" --split train --route-seed 2 --lighting overcast --lane-jitter 0.8
-"$synth" --out "$out/train_morning" --split train --route-seed 3 --lighting morning --lane-jitter 0.6
-"$synth" --out "$out/train_noon" --split train --route-seed 4 --lighting noon --lane-jitter 0.9
-"$synth" --out "$out/val_haze" --split test --route-seed 11 --lighting haze --max-length 600
-"$synth" --out "$out/test_dusk" --split test --route-seed 7 --lighting dusk --max-length 600
+render() {
+  local name="$1"; shift
+  if [ -n "$only" ] && [ "$only" != "$name" ]; then return; fi
+  if [ -f "$out/$name/dataset.json" ]; then echo "town_drives: $name exists"; return; fi
+  "$synth" --quiet --out "$out/$name" "$@"
+}
+jitter=1.5,0.3,3,10
+render train_day      --split train --route-seed 1 --lighting day --lane-jitter 0.5
+render train_overcast --split train --route-seed 2 --lighting overcast --lane-jitter 0.8
+render train_morning  --split train --route-seed 3 --lighting morning --lane-jitter 0.6
+render train_noon     --split train --route-seed 4 --lighting noon --lane-jitter 0.9
+render train_jitter_day      --split train --route-seed 5 --lighting day --view-jitter $jitter
+render train_jitter_overcast --split train --route-seed 6 --lighting overcast --view-jitter $jitter
+render train_jitter_morning  --split train --route-seed 8 --lighting morning --view-jitter $jitter
+render train_jitter_noon     --split train --route-seed 9 --lighting noon --view-jitter $jitter
+render val_haze   --split test --route-seed 11 --lighting haze --max-length 600
+render test_dusk  --split test --route-seed 7 --lighting dusk --max-length 600
+render test_route21_noon --split test --route-seed 21 --lighting noon --max-length 600
+render test_route22_dusk --split test --route-seed 22 --lighting dusk --max-length 600
+render test_route23_haze --split test --route-seed 23 --lighting haze --max-length 600
+render test_mount_high   --split test --route-seed 24 --lighting day --max-length 600 \
+  --camera-mount 1.2,0,1.80,3

@@ -1,6 +1,6 @@
 // ATTENTION: multi-head softmax(scale Q K^T) V over row-major Q [Lq,E], K/V [Lk,E].
 // params: heads, scale (f32 bits), precision (0 fp32; 1 int8 scores:
-// kernels/common/qs8_attention.h; 2 bf16: kernels/ref/bf16_attention__ref.h)
+// kernels/attention/qs8_attention.h; 2 bf16: kernels/attention/bf16_attention__ref.h)
 // Fast path: K and V are packed per head into the op's scratch (K^T in key
 // blocks; tasks over heads), then (head, query chunk) tasks run the fused
 // online-softmax kernel. int8 scores: the int8 table's kernel where it has one
@@ -9,10 +9,10 @@
 // integers. bf16: the bf16 table's kernel where the CPU has one (AVX-512
 // BF16), else Q, K and V rounded to bf16 into scratch and the fp32 path over
 // them (the weights unrounded), or the bf16 reference without fast kernels.
-#include "kernels/common/qkernel_set.h"
-#include "kernels/ref/bf16_attention__ref.h"
-#include "kernels/ref/f32_attention__ref.h"
-#include "kernels/ref/qs8_attention__ref.h"
+#include "kernels/attention/bf16_attention__ref.h"
+#include "kernels/attention/f32_attention__ref.h"
+#include "kernels/attention/qs8_attention__ref.h"
+#include "kernels/gemm/qs8_gemm.h"
 #include "runtime/engine/ops/op_common.h"
 #include "runtime/engine/ops/ops.h"
 

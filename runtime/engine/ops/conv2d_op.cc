@@ -3,8 +3,8 @@
 // params: stride_h, stride_w, pad_top, pad_left, pad_bottom, pad_right, act
 // Fast path: output rows split across threads; dense weights repacked at load
 // to [KH][KW][Ci][Co] so output channels are the vector dimension.
-#include "kernels/ref/f32_conv2d__ref.h"
-#include "kernels/ref/f32_dwconv2d__ref.h"
+#include "kernels/conv/f32_conv2d__ref.h"
+#include "kernels/dwconv/f32_dwconv2d__ref.h"
 #include "runtime/engine/ops/op_common.h"
 #include "runtime/engine/ops/ops.h"
 

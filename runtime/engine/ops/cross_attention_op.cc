@@ -1,5 +1,5 @@
 // CROSS_ATTENTION_1Q: one query attending over memory rows whose key and value
-// projections are folded away (see kernels/ref/f32_cross_attention_1q__ref.h).
+// projections are folded away (see kernels/attention/f32_cross_attention_1q__ref.h).
 // inputs: Q [1,E], M [L,E], P [L,E] or absent, Wk [E,E], bk [E], Wv [E,E], bv [E]
 // params: heads, scale (f32 bits)
 // Fast path, in the op's scratch: qt = scale W_k^T q per head (GEMM per head),
@@ -8,7 +8,7 @@
 // Costs O(L E H) instead of the projections' O(L E^2).
 #include <cstring>
 
-#include "kernels/ref/f32_cross_attention_1q__ref.h"
+#include "kernels/attention/f32_cross_attention_1q__ref.h"
 #include "runtime/engine/ops/op_common.h"
 #include "runtime/engine/ops/ops.h"
 

@@ -1,5 +1,5 @@
 // ADD (a + b, same element count), ACTIVATION (params: act) and CONCAT (row-wise).
-#include "kernels/ref/f32_elementwise__ref.h"
+#include "kernels/rowwise/f32_elementwise__ref.h"
 #include "runtime/engine/ops/op_common.h"
 #include "runtime/engine/ops/ops.h"
 

@@ -1,5 +1,5 @@
 // LAYERNORM over the last axis. inputs: X, gamma [N], beta [N]; params: eps (f32 bits)
-#include "kernels/ref/f32_layernorm__ref.h"
+#include "kernels/rowwise/f32_layernorm__ref.h"
 #include "runtime/engine/ops/op_common.h"
 #include "runtime/engine/ops/ops.h"
 

@@ -2,7 +2,7 @@
 // inputs: X, W, B, R?   params: act
 // Fast path: W packed at load into the kernel's column panels; the output is
 // split into a grid of row groups x panel groups across threads.
-#include "kernels/ref/f32_linear__ref.h"
+#include "kernels/gemm/f32_gemm__ref.h"
 #include "runtime/engine/ops/op_common.h"
 #include "runtime/engine/ops/ops.h"
 
@@ -19,8 +19,8 @@ struct LinearState {
 void eval_linear_ref(const OpNode& node, const RunContext&) {
   const auto& s = node.state_as<LinearState>();
   const float* residual = node.n_in > 3 && node.in[3] ? node.in[3]->f32() : nullptr;
-  kernels::f32_linear__ref(s.shape, node.in[0]->f32(), node.in[1]->f32(), node.in[2]->f32(),
-                           residual, s.act, node.out[0]->f32());
+  kernels::f32_gemm__ref(s.shape, node.in[0]->f32(), node.in[1]->f32(), node.in[2]->f32(), residual,
+                         s.act, node.out[0]->f32());
 }
 
 struct LinearTask {

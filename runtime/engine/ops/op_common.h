@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "runtime/common/check.h"
+#include "runtime/base/check.h"
 #include "runtime/engine/op_node.h"
 
 namespace aprt::ops {

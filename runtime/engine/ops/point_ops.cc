@@ -10,8 +10,8 @@
 // coordinates only and is the same on every path (reference or fast, any
 // thread count); FPS and the tokenisation run on one thread, grouping and
 // interpolation split their centres / targets over the pool.
-#include "kernels/common/pointnet_fast.h"
-#include "kernels/ref/pointnet__ref.h"
+#include "kernels/points/pointnet__ref.h"
+#include "kernels/points/pointnet_fast.h"
 #include "runtime/engine/ops/op_common.h"
 #include "runtime/engine/ops/ops.h"
 

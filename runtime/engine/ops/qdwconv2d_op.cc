@@ -6,9 +6,9 @@
 //           (f32 bits, > 0), input zero point (0..255)
 // eval: X quantised to uint8 into scratch; the kernel accumulates exactly and
 // applies y = act(mult[c] * acc + bias[c]), mult[c] = input scale x weight scale[c].
-#include "kernels/common/qkernel_set.h"
-#include "kernels/ref/qs8_dwconv2d__ref.h"
-#include "kernels/ref/qs8_gemm__ref.h"
+#include "kernels/dwconv/qu8s8_dwconv2d__ref.h"
+#include "kernels/gemm/qs8_gemm.h"
+#include "kernels/gemm/qu8s8_gemm__ref.h"
 #include "runtime/engine/ops/op_common.h"
 #include "runtime/engine/ops/ops.h"
 

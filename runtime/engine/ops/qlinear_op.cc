@@ -12,9 +12,9 @@
 // finishes its own tile (activation, residual) in blocks of kFinishRows rows
 // right after computing them, while they are still in cache -- the same
 // arithmetic per element as one pass over the whole output, on every thread.
-#include "kernels/common/qkernel_set.h"
-#include "kernels/ref/f32_elementwise__ref.h"
-#include "kernels/ref/qs8_gemm__ref.h"
+#include "kernels/gemm/qs8_gemm.h"
+#include "kernels/gemm/qu8s8_gemm__ref.h"
+#include "kernels/rowwise/f32_elementwise__ref.h"
 #include "runtime/engine/ops/op_common.h"
 #include "runtime/engine/ops/ops.h"
 

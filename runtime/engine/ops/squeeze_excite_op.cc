@@ -3,7 +3,7 @@
 // Fast path: the gate is computed once (one thread: its mean is a reduction
 // whose order must not depend on the thread count), then pixels are scaled in
 // parallel. W2 is transposed at load so the gate is computed with vectors.
-#include "kernels/ref/f32_squeeze_excite__ref.h"
+#include "kernels/rowwise/f32_squeeze_excite__ref.h"
 #include "runtime/engine/ops/op_common.h"
 #include "runtime/engine/ops/ops.h"
 

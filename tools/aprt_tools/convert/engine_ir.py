@@ -108,7 +108,7 @@ def conv2d_nhwc(x, w, b, stride, pads, depthwise):
 
 def quantize_u8(x: np.ndarray, scale: float, zero: int) -> np.ndarray:
     """The runtime's activation quantiser: float32 x * (1/scale), round half to
-    even, + zero, clamped to 0..255 (kernels/ref/qs8_gemm__ref.cc)."""
+    even, + zero, clamped to 0..255 (kernels/gemm/qu8s8_gemm__ref.cc)."""
     inv = np.float32(1.0) / np.float32(scale)
     q = np.rint(np.asarray(x, np.float32) * inv) + np.float32(zero)
     return np.clip(q, 0, 255).astype(np.int64)
@@ -275,7 +275,7 @@ def run_op(op: Op, get) -> list:
 
 def fake_quantize_rows(x: np.ndarray) -> np.ndarray:
     """Symmetric int8 per row (last axis) and back, rounding as the engine does
-    (kernels/common/qs8_attention.h): scale = max|x| / 127, q = rne(x * 127 / max|x|)."""
+    (kernels/attention/qs8_attention.h): scale = max|x| / 127, q = rne(x * 127 / max|x|)."""
     x = np.asarray(x, np.float32)
     amax = np.abs(x).max(axis=-1, keepdims=True)
     inv = np.where(amax > 0, np.float32(127.0) / np.where(amax > 0, amax, 1), 0).astype(np.float32)

@@ -25,6 +25,7 @@ from .transformer import Transformer
 
 IMAGENET_MEAN = (0.485, 0.456, 0.406)
 IMAGENET_STD = (0.229, 0.224, 0.225)
+UNCERTAINTY_HIDDEN = 256  # width of the confidence heads' MLPs
 
 
 @dataclass
@@ -52,6 +53,11 @@ class AprConfig:
     # LiDAR raw-points models (in_channels 6): crop, sampling, PointNet++
     # levels and tokens (pointnet2.points_config). None for the others.
     points: dict | None = None
+    # Per-pose confidence: two more heads regress, from the decoder outputs,
+    # the log scale of a Laplace error distribution per position axis (in the
+    # normalised units of the position head) and per rotation axis (radians,
+    # camera frame: x forward, y left, z up), appended as outputs 7..12.
+    uncertainty: bool = False
     extra: dict = field(default_factory=dict)
 
     @staticmethod
@@ -188,10 +194,15 @@ class AprTransformer(nn.Module):
         self.query_embed_rot = nn.Embedding(1, cfg.hidden_dim)
         self.regressor_head_t = nn.Sequential(PoseRegressor(cfg.hidden_dim, 3, cfg.head_dim))
         self.regressor_head_rot = nn.Sequential(PoseRegressor(cfg.hidden_dim, 4, cfg.head_dim))
+        if cfg.uncertainty:  # not upstream's: a checkpoint of upstream loads without them
+            self.uncertainty_head_t = PoseRegressor(cfg.hidden_dim, 3, UNCERTAINTY_HIDDEN)
+            self.uncertainty_head_rot = PoseRegressor(cfg.hidden_dim, 3, UNCERTAINTY_HIDDEN)
 
     def forward(self, img: torch.Tensor) -> torch.Tensor:
         """img: (N, C, S, S), already normalised, or points (N, 6, P, 1). Returns
-        (N, 7): x y z qw qx qy qz."""
+        (N, 7): x y z qw qx qy qz; with cfg.uncertainty (N, 13): then the log
+        Laplace scales of x y z (normalised units) and of the rotation about
+        the camera's x y z axes (radians)."""
         if self.cfg.points:
             r3 = r4 = self.backbone[0](img)
         else:
@@ -202,4 +213,13 @@ class AprTransformer(nn.Module):
                                       self.query_embed_rot.weight)
         x_t = self.regressor_head_t[0](hs_t[:, 0, :])
         x_rot = self.regressor_head_rot[0](hs_rot[:, 0, :])
-        return torch.cat([x_t, x_rot], dim=1)
+        if not self.cfg.uncertainty:
+            return torch.cat([x_t, x_rot], dim=1)
+        # The confidence heads read the decoder outputs but do not shape them
+        # (detached while training): the pose is learned exactly as without them.
+        h_t, h_rot = hs_t[:, 0, :], hs_rot[:, 0, :]
+        if self.training:
+            h_t, h_rot = h_t.detach(), h_rot.detach()
+        s_t = self.uncertainty_head_t(h_t)
+        s_rot = self.uncertainty_head_rot(h_rot)
+        return torch.cat([x_t, x_rot, s_t, s_rot], dim=1)

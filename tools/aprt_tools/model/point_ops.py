@@ -1,6 +1,6 @@
 """The PointNet++ primitives of the raw-points modality (DESIGN.md 4.3), as
 the runtime's engine ops compute them (model_bin/FORMAT.md, ops 11..15;
-kernels/ref/pointnet__ref.cc). This file is their definition.
+kernels/points/pointnet__ref.cc). This file is their definition.
 
 Every index an op picks depends only on coordinates, so the engine must pick
 the same ones bit for bit. The arithmetic is therefore fixed here, not left to
