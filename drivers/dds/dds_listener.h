@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <memory>
 
-#include "drivers/dds/dds_publisher.h"
+#include "drivers/output/dds/dds_publisher.h"
 
 namespace aprt {
 

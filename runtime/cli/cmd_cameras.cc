@@ -10,8 +10,8 @@
 #include <cstdio>
 #include <cstring>
 
-#include "drivers/camera/libcamera_source.h"
-#include "drivers/camera/v4l2_devices.h"
+#include "drivers/input/camera/libcamera_source.h"
+#include "drivers/input/camera/v4l2_devices.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
 

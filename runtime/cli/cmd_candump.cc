@@ -15,9 +15,9 @@
 #include <fstream>
 #include <string>
 
-#include "drivers/can/dbc.h"
-#include "drivers/can/pose_can_codec.h"
-#include "drivers/can/socketcan.h"
+#include "drivers/output/can/dbc.h"
+#include "drivers/output/can/pose_can_codec.h"
+#include "drivers/output/can/socketcan.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
 #include "runtime/config/config.h"

@@ -137,7 +137,7 @@ int cmd_eval(int argc, char** argv) {
   for (size_t i = 0; i < n; ++i) {
     EvalFrame f;
     const char* why = "";
-    if (!inputs->fill(i, e.input().f32(), &f, &why)) {
+    if (!inputs->fill(i, e, &f, &why)) {
       std::fprintf(stderr, "aprt eval: frame %zu skipped: %s\n", i, why);
       ++bad_frames;
       continue;

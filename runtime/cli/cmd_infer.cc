@@ -21,7 +21,7 @@
 #include "runtime/cli/commands.h"
 #include "runtime/cli/load_model.h"
 #include "runtime/engine/engine.h"
-#include "runtime/engine/model_input.h"
+#include "runtime/engine/engine_input.h"
 #include "runtime/pose/pose_decode.h"
 
 namespace aprt::cli {
@@ -102,16 +102,13 @@ int cmd_infer(int argc, char** argv) {
   if (!engine) return 2;
   Engine& e = *engine;
   const ModelMeta& m = e.meta();
-  const kernels::PreprocessParams pp = preprocess_params(m);
-  auto plan = std::make_unique<kernels::PreprocessPlan>();
-  if (!kernels::plan_preprocess(pp, format, width, height, plan.get(),
-                                e.kernel_set() ? e.kernel_set()->preprocess : nullptr)) {
-    std::fprintf(stderr, "aprt infer: cannot map %dx%d frames to the model's input\n", width,
-                 height);
+  auto input = EngineInput::for_images(e, format, width, height);
+  if (!input) {
+    std::fprintf(stderr, "aprt infer: %s\n", input.error().message());
     return 2;
   }
   const ImageView view{pixels.data(), format, width, height, stride};
-  kernels::preprocess_image(*plan, view, e.input().f32());
+  input.value()->write_image(view, e);
   (void)e.run();
   const PoseEstimate p = decode_pose(e.output().f32(), m);
   const double here[7] = {p.position[0],    p.position[1],    p.position[2],   p.orientation[0],

@@ -84,7 +84,7 @@ int cmd_inputs(int argc, char** argv) {
   for (size_t k = 0; ok && k < frames; ++k) {
     EvalFrame frame;
     const char* why = nullptr;
-    if (!inputs->fill(k * size_t(every), e.input().f32(), &frame, &why)) {
+    if (!inputs->fill(k * size_t(every), e, &frame, &why)) {
       std::fprintf(stderr, "aprt inputs: frame %zu: %s\n", k * size_t(every), why ? why : "?");
       std::fclose(f);
       std::remove(out);

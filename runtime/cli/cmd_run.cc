@@ -40,9 +40,9 @@ std::string resolve(const std::string& path, const std::string& base) {
 // model is loaded for real (checksums, op set, memory plan) with the
 // configured engine options.
 std::string source_text(const Config::Source& s) {
-  if (s.type == "replay" || s.type == "lidar_replay") return s.replay.path;
-  if (s.type == "pointcloud2") return "PointCloud2 on rt" + s.pointcloud2.topic;
-  if (s.type == "libcamera") {
+  if (s.replay_source()) return s.replay.path;
+  if (s.type == SourceType::kPointCloud2) return "PointCloud2 on rt" + s.pointcloud2.topic;
+  if (s.type == SourceType::kLibcamera) {
     return "libcamera camera " +
            (s.libcamera.camera.empty() ? std::string("0") : s.libcamera.camera);
   }
@@ -144,7 +144,7 @@ int cmd_run(int argc, char** argv) {
   // The command line's replay options apply to every camera's replay.
   const auto adjust = [&](Config::Source& src) {
     if (replay) {  // a LiDAR configuration replays LiDAR sequences
-      src.type = src.lidar_source() ? "lidar_replay" : "replay";
+      src.type = src.lidar_source() ? SourceType::kLidarReplay : SourceType::kReplay;
       src.replay.path = replay;
     } else {
       src.replay.path = resolve(src.replay.path, base);

@@ -3,12 +3,10 @@
 #include <cstdio>
 #include <vector>
 
-#include "drivers/frame/frame.h"
-#include "drivers/lidar/lidar_sequence.h"
-#include "drivers/replay/deeploc_replay.h"
-#include "kernels/preprocess/lidar_input.h"
-#include "kernels/preprocess/preprocess_image.h"
-#include "runtime/engine/model_input.h"
+#include "drivers/input/frame.h"
+#include "drivers/input/lidar/lidar_sequence.h"
+#include "drivers/input/replay/deeploc_replay.h"
+#include "runtime/engine/engine_input.h"
 
 namespace aprt::cli {
 namespace {
@@ -24,26 +22,24 @@ class CameraInputs final : public EvalInputs {
     std::unique_ptr<CameraInputs> in(new CameraInputs());
     in->replay_ = std::move(replay.value());
     DeeplocReplay& r = *in->replay_;
-    const kernels::PreprocessParams pp = preprocess_params(e.meta());
-    in->plan_ = std::make_unique<kernels::PreprocessPlan>();
-    if (!kernels::plan_preprocess(pp, PixelFormat::kRgb24, r.width(), r.height(), in->plan_.get(),
-                                  e.kernel_set() ? e.kernel_set()->preprocess : nullptr)) {
-      std::fprintf(stderr, "aprt eval: cannot map %dx%d frames to the %dx%d input\n", r.width(),
-                   r.height(), pp.size, pp.size);
+    auto input = EngineInput::for_images(e, PixelFormat::kRgb24, r.width(), r.height());
+    if (!input) {
+      std::fprintf(stderr, "aprt eval: %s\n", input.error().message());
       return nullptr;
     }
+    in->input_ = std::move(input.value());
     in->pixels_.resize(r.frame_bytes());
     in->frame_.data = in->pixels_.data();
     in->frame_.capacity = in->pixels_.size();
     return in;
   }
   size_t size() const override { return replay_->size(); }
-  bool fill(size_t i, float* input, EvalFrame* f, const char** why) override {
+  bool fill(size_t i, Engine& e, EvalFrame* f, const char** why) override {
     if (Status s = replay_->read(i, &frame_, i, 0); !s) {
       *why = keep_reason(s.error());
       return false;
     }
-    kernels::preprocess_image(*plan_, frame_.view(), input);
+    input_->write_image(frame_.view(), e);
     f->name = frame_.info.name;
     f->position = frame_.info.truth_position;
     f->orientation = frame_.info.truth_orientation;
@@ -52,7 +48,7 @@ class CameraInputs final : public EvalInputs {
 
  private:
   std::unique_ptr<DeeplocReplay> replay_;
-  std::unique_ptr<kernels::PreprocessPlan> plan_;
+  std::unique_ptr<EngineInput> input_;
   std::vector<uint8_t> pixels_;
   FrameBuffer frame_;
 };
@@ -78,30 +74,21 @@ class LidarInputs final : public EvalInputs {
     std::unique_ptr<LidarInputs> in(new LidarInputs());
     in->seq_ = std::move(seq.value());
     in->cloud_ = std::move(cloud.value());
-    const ModelMeta& m = e.meta();
-    in->points_model_ = m.modality == format::Modality::kLidarPoints;
-    in->fast_ = e.kernel_set() != nullptr;
-    if (in->points_model_) {
-      in->points_ = points_input_params(m);
-      in->scratch_.resize(kernels::lidar_points_input_scratch(kMaxPoints, in->points_.samples));
-    } else {
-      in->bev_ = bev_input_params(m);
-      in->counts_.resize(size_t(in->bev_.bev.grid) * in->bev_.bev.grid * 2);
+    auto input = EngineInput::for_scans(e, kMaxPoints);
+    if (!input) {
+      std::fprintf(stderr, "aprt eval: %s\n", input.error().message());
+      return nullptr;
     }
+    in->input_ = std::move(input.value());
     return in;
   }
   size_t size() const override { return seq_->size(); }
-  bool fill(size_t i, float* input, EvalFrame* f, const char** why) override {
+  bool fill(size_t i, Engine& e, EvalFrame* f, const char** why) override {
     if (Status s = seq_->read(i, PointRegion{}, cloud_.get()); !s) {
       *why = keep_reason(s.error());
       return false;
     }
-    if (points_model_) {
-      kernels::lidar_points_input(points_, cloud_->points(), cloud_->size(), fast_, scratch_.data(),
-                                  input);
-    } else {
-      kernels::lidar_bev_input(bev_, cloud_->points(), cloud_->size(), counts_.data(), input);
-    }
+    input_->write_scan(cloud_->points(), cloud_->size(), e);
     const ReplayEntry& en = seq_->entry(i);
     f->name = en.name;
     f->position = en.position;
@@ -112,11 +99,7 @@ class LidarInputs final : public EvalInputs {
  private:
   std::unique_ptr<LidarSequence> seq_;
   std::unique_ptr<PointCloud> cloud_;
-  bool points_model_ = false, fast_ = true;
-  kernels::BevInputParams bev_{};
-  kernels::PointsInputParams points_{};
-  std::vector<uint16_t> counts_;
-  std::vector<float> scratch_;
+  std::unique_ptr<EngineInput> input_;
 };
 
 }  // namespace

@@ -19,9 +19,9 @@ class EvalInputs {
  public:
   virtual ~EvalInputs() = default;
   virtual size_t size() const = 0;
-  // Fills `input` (the engine's input tensor) for frame i; false with a
-  // message in `why` when the frame cannot be read (the caller skips it).
-  virtual bool fill(size_t i, float* input, EvalFrame* frame, const char** why) = 0;
+  // Fills the engine's input for frame i; false with a message in `why`
+  // when the frame cannot be read (the caller skips it).
+  virtual bool fill(size_t i, Engine& engine, EvalFrame* frame, const char** why) = 0;
 
  protected:
   const char* keep_reason(const Error& e) {  // the message outlives the Error

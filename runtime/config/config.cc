@@ -9,6 +9,34 @@
 #include "runtime/config/yaml_tree.h"
 
 namespace aprt {
+
+namespace {
+constexpr struct {
+  const char* name;
+  SourceType type;
+} kSourceTypes[] = {
+    {"replay", SourceType::kReplay},           {"v4l2", SourceType::kV4l2},
+    {"libcamera", SourceType::kLibcamera},     {"lidar_replay", SourceType::kLidarReplay},
+    {"pointcloud2", SourceType::kPointCloud2},
+};
+}  // namespace
+
+const char* source_type_name(SourceType t) {
+  for (const auto& n : kSourceTypes) {
+    if (n.type == t) return n.name;
+  }
+  return "?";
+}
+
+bool source_type_from_name(const std::string& name, SourceType* out) {
+  for (const auto& n : kSourceTypes) {
+    if (name == n.name) {
+      *out = n.type;
+      return true;
+    }
+  }
+  return false;
+}
 namespace {
 
 using yaml::Node;
@@ -203,8 +231,10 @@ Status read_source(Reader& r, const Node* src, const std::string& path, Config::
 #define TRY(expr) \
   if (!(s = (expr))) return s
   TRY(r.map(src, path, {"type", "replay", "v4l2", "libcamera", "pointcloud2", "lidar"}));
-  TRY(r.str(src, path, "type", &src_out->type,
+  std::string type = source_type_name(src_out->type);
+  TRY(r.str(src, path, "type", &type,
             {"replay", "v4l2", "libcamera", "lidar_replay", "pointcloud2"}));
+  source_type_from_name(type, &src_out->type);  // one of the choices just checked
   const Node* rp = src ? src->get("replay") : nullptr;
   TRY(r.map(rp, join(path, "replay"), {"path", "rate_hz", "loop", "frames"}));
   TRY(r.str(rp, join(path, "replay"), "path", &src_out->replay.path));
@@ -301,7 +331,7 @@ Status read_cameras(Reader& r, const Node* root, Config* c) {
     const Node* src = n->get("source");
     if (!src) return r.fail(n, p + ".source", "required");
     if (!(s = read_source(r, src, p + ".source", &cam.source))) return s;
-    if (cam.source.type == "replay" && cam.source.replay.path.empty()) {
+    if (cam.source.type == SourceType::kReplay && cam.source.replay.path.empty()) {
       return r.fail(src, p + ".source.replay.path", "required for a replay source");
     }
     const Node* t = n->get("sensor_to_base_link");
@@ -347,9 +377,8 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(r.str(root, "", "model", &c.model));
     if (const Node* fi = root->get("fault_injection"); fi && fi->kind != Node::kNull) {
       if (fi->kind != Node::kSeq) return r.fail(fi, "fault_injection", "expected a list of faults");
-      if (fi->seq.size() > size_t(FaultInjector::kMaxFaults)) {
-        return r.fail(fi, "fault_injection",
-                      "at most " + std::to_string(FaultInjector::kMaxFaults) + " faults");
+      if (fi->seq.size() > size_t(kMaxFaults)) {
+        return r.fail(fi, "fault_injection", "at most " + std::to_string(kMaxFaults) + " faults");
       }
       for (size_t i = 0; i < fi->seq.size(); ++i) {
         const Node* f = fi->seq[i].get();
@@ -497,17 +526,16 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
                  "by `aprt sign keygen`)",
                  origin.c_str());
   }
-  if ((c.source.type == "replay" || c.source.type == "lidar_replay") &&
-      c.source.replay.path.empty()) {
+  if (c.source.replay_source() && c.source.replay.path.empty()) {
     return Error(Errc::kInvalidArgument, "%s: source.replay.path is required for a %s source",
-                 origin.c_str(), c.source.type.c_str());
+                 origin.c_str(), source_type_name(c.source.type));
   }
   for (const Config::Camera& cam : c.cameras) {
     if (cam.source.lidar_source()) {
       return Error(Errc::kInvalidArgument,
                    "%s: cameras.%s: a LiDAR source (%s) is one sensor: give it as `source`, not "
                    "in `cameras`",
-                   origin.c_str(), cam.name.c_str(), cam.source.type.c_str());
+                   origin.c_str(), cam.name.c_str(), source_type_name(cam.source.type));
     }
   }
   return c;

@@ -9,9 +9,16 @@
 #include <vector>
 
 #include "runtime/base/expected.h"
-#include "runtime/loop/fault_injector.h"
+#include "runtime/config/fault_spec.h"
 
 namespace aprt {
+
+// Where frames come from: camera frames (replay, v4l2, libcamera) or LiDAR
+// scans (lidar_replay, pointcloud2). Parsed once from source.type.
+enum class SourceType : uint8_t { kReplay, kV4l2, kLibcamera, kLidarReplay, kPointCloud2 };
+const char* source_type_name(SourceType t);
+// false for a name that is none of the above.
+bool source_type_from_name(const std::string& name, SourceType* out);
 
 struct ThreadConfig {
   int priority = 0;  // SCHED_FIFO priority 1..99; 0 = normal scheduling
@@ -22,7 +29,7 @@ struct Config {
   std::string origin = "<defaults>";  // where it came from, for messages
   std::string model;
 
-  // Test rigs only: deliberate faults (runtime/loop/fault_injector.h).
+  // Test rigs only: deliberate faults (runtime/config/fault_spec.h).
   std::vector<FaultSpec> fault_injection;
 
   // Ed25519 signatures over model files (runtime/loop/model_signature.h).
@@ -38,8 +45,7 @@ struct Config {
   } engine;
 
   struct Source {
-    // replay | v4l2 | libcamera (camera frames); lidar_replay | pointcloud2 (LiDAR scans)
-    std::string type = "replay";
+    SourceType type = SourceType::kReplay;
     struct Replay {
       std::string path;
       double rate_hz = 10.0;  // 0: as fast as inference takes frames; "recorded": times.txt
@@ -62,7 +68,8 @@ struct Config {
       int fps = 30;
       int buffers = 4;
     } libcamera;
-    struct PointCloud2 {  // sensor_msgs/msg/PointCloud2 over DDS (drivers/dds/pointcloud2_reader.h)
+    struct PointCloud2 {                  // sensor_msgs/msg/PointCloud2 over DDS
+                                          // (drivers/input/pointcloud2/pointcloud2_reader.h)
       std::string topic = "/points_raw";  // ROS name ("rt" is prepended)
       int domain = 0;
       bool reliable = false;  // ROS 2 sensor-data QoS: best effort
@@ -76,7 +83,13 @@ struct Config {
       int min_points = 1;  // a scan with fewer points is flagged sparse (points models: also
                            // any scan with fewer points than the model samples)
     } lidar;
-    bool lidar_source() const { return type == "lidar_replay" || type == "pointcloud2"; }
+    bool lidar_source() const {
+      return type == SourceType::kLidarReplay || type == SourceType::kPointCloud2;
+    }
+    // A recorded sequence (camera or LiDAR), paced by aprt; not a device.
+    bool replay_source() const {
+      return type == SourceType::kReplay || type == SourceType::kLidarReplay;
+    }
   } source;
 
   // Several cameras, fused into one pose (runtime/pose/pose_fusion.h). Empty:

@@ -11,31 +11,13 @@
 #include <vector>
 
 #include "runtime/base/expected.h"
+#include "runtime/config/fault_spec.h"
 
 namespace aprt {
 
-enum class FaultKind : uint8_t {
-  kCameraStall,       // capture delivers nothing for duration_ms (at capture frame at_frame)
-  kInferenceOverrun,  // inference takes duration_ms longer, for `count` frames
-  kNanOutput,         // the network output is NaN, for `count` frames
-  kPublishFailure,    // the outputs' writes fail, for `count` poses
-  kInferenceHang,     // the inference thread stops beating for duration_ms (at at_frame)
-};
-
-struct FaultSpec {
-  FaultKind kind = FaultKind::kCameraStall;
-  uint64_t at_frame = 0;
-  uint64_t count = 1;
-  double duration_ms = 0;
-};
-
-// "camera_stall" ... -> kind; false for an unknown name.
-bool fault_kind_from_name(const std::string& name, FaultKind* out);
-const char* fault_kind_name(FaultKind k);
-
 class FaultInjector {
  public:
-  static constexpr int kMaxFaults = 8;
+  static constexpr int kMaxFaults = aprt::kMaxFaults;
   FaultInjector() = default;
   Status configure(const std::vector<FaultSpec>& faults);
   bool any() const noexcept { return n_ > 0; }

@@ -21,7 +21,7 @@ Status model_fits_source(const ModelMeta& m, const Config::Source& src, const st
   const bool lidar_model = m.modality != format::Modality::kImage;
   if (src.lidar_source() == lidar_model) return ok();
   return Error(Errc::kWrongTarget, "run: %s is a %s model, but source.type '%s' gives %s (%s)",
-               model.c_str(), format::modality_name(m.modality), src.type.c_str(),
+               model.c_str(), format::modality_name(m.modality), source_type_name(src.type),
                src.lidar_source() ? "LiDAR scans" : "camera frames",
                lidar_model ? "use lidar_replay or pointcloud2" : "use replay, v4l2 or libcamera");
 }

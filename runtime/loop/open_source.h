@@ -5,7 +5,7 @@
 
 #include <memory>
 
-#include "drivers/frame/frame_source.h"
+#include "drivers/input/frame_source.h"
 #include "runtime/base/image.h"
 #include "runtime/config/config.h"
 

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "drivers/dds/dds_publisher.h"
+#include "drivers/output/dds/dds_publisher.h"
 
 namespace aprt {
 namespace {
@@ -105,7 +105,7 @@ const can::SenderStats* PoseOutputs::can_stats() const {
 void PoseOutputs::publish(const PoseRecord& r, int64_t now_ns,
                           int64_t realtime_offset_ns) noexcept {
   if (!dds_ && !can_sender_) return;
-  last_ = geometry_->to_base_link(r.pose);
+  last_ = geometry_->from_base(r.base_position, r.base_orientation);
   const int64_t stamp_ns =
       r.source_stamp_ns ? r.source_stamp_ns : r.capture_ns + realtime_offset_ns;
   const bool valid = r.flags == 0 && r.state == RunState::kRunning;

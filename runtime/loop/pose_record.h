@@ -34,7 +34,12 @@ struct PoseRecord {
   int64_t source_stamp_ns = 0;  // the sensor's own stamp (PointCloud2 header), if any: used instead
   int64_t inference_start_ns = 0;
   int64_t inference_end_ns = 0;
-  PoseEstimate pose;   // sensor pose in the map frame
+  PoseEstimate pose;  // the (trigger) sensor's pose in the training map frame: console, errors
+  // base_link in the training map frame: what the outputs publish (after the
+  // map offset). The extrinsic is applied once, by the estimator (where
+  // several cameras are fused, this is the fused pose).
+  double base_position[3] = {};
+  double base_orientation[4] = {1, 0, 0, 0};
   uint32_t flags = 0;  // pose flags | loop flags; 0 = valid
   RunState state = RunState::kStarting;
   bool has_truth = false;

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/loop/runtime.h"
+#include "runtime/loop/run_stats.h"
 
 namespace aprt {
 namespace {

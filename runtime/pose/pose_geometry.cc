@@ -35,7 +35,20 @@ BasePose PoseGeometry::to_base_link(const PoseEstimate& s) noexcept {
   q.normalize();
   t.linear() = q.toRotationMatrix();
   t.translation() = Eigen::Vector3d(s.position[0], s.position[1], s.position[2]);
-  const Eigen::Isometry3d base = offset_ * t * base_from_sensor_inv_;
+  return finish(t * base_from_sensor_inv_);
+}
+
+BasePose PoseGeometry::from_base(const double position[3], const double orientation[4]) noexcept {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  Eigen::Quaterniond q(orientation[0], orientation[1], orientation[2], orientation[3]);
+  q.normalize();
+  t.linear() = q.toRotationMatrix();
+  t.translation() = Eigen::Vector3d(position[0], position[1], position[2]);
+  return finish(t);
+}
+
+BasePose PoseGeometry::finish(const Eigen::Isometry3d& base_in_map) noexcept {
+  const Eigen::Isometry3d base = offset_ * base_in_map;
   BasePose out;
   out.position = base.translation();
   Eigen::Quaterniond r(base.linear());

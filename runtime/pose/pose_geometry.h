@@ -39,9 +39,14 @@ class PoseGeometry {
 
   // @rt (Eigen fixed-size types only: no allocation).
   BasePose to_base_link(const PoseEstimate& sensor_in_map) noexcept;
+  // The same from base_link already in the training map frame (the loop's
+  // estimate: the extrinsic applied once, where cameras are fused): only the
+  // map offset, continuity and covariance. @rt.
+  BasePose from_base(const double position[3], const double orientation[4]) noexcept;
   void reset_continuity() { have_previous_ = false; }
 
  private:
+  BasePose finish(const Eigen::Isometry3d& base_in_map) noexcept;
   Eigen::Isometry3d base_from_sensor_inv_;  // T_base_sensor^-1 = T_sensor_base
   Eigen::Isometry3d offset_;
   double var_pos_, var_rot_;

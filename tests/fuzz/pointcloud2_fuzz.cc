@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "drivers/lidar/pointcloud2_decode.h"
+#include "drivers/input/pointcloud2/pointcloud2_decode.h"
 
 namespace {
 

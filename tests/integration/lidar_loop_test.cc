@@ -46,7 +46,7 @@ uint32_t test_domain() {
 Config lidar_config(const std::string& model) {
   Config c;
   c.model = fixtures() + "/golden/" + model + "/model.aprt";
-  c.source.type = "lidar_replay";
+  c.source.type = SourceType::kLidarReplay;
   c.source.replay.path = fixtures() + "/run_lidar";
   c.source.replay.rate_hz = 0;  // as fast as inference takes scans
   c.output.console = false;
@@ -166,7 +166,7 @@ TEST(LidarLoop, BadScansAreFlaggedOrSkippedNeverFatal) {
 TEST(LidarLoop, ModelAndSourceMustFit) {
   if (fixtures().empty()) GTEST_SKIP() << "APRT_RUN_FIXTURES not set";
   Config camera = lidar_config("tiny_points");
-  camera.source.type = "replay";
+  camera.source.type = SourceType::kReplay;
   camera.source.replay.path = fixtures() + "/run_replay";
   auto a = Runtime::create(camera);
   ASSERT_FALSE(a);
@@ -251,7 +251,7 @@ TEST(LidarLoop, PointCloud2InPoseOutStampedWithTheCloud) {
   char tmp[] = "/tmp/aprt_pc2_XXXXXX";
   ASSERT_NE(mkdtemp(tmp), nullptr);
   c.model = sane_points_model(tmp);
-  c.source.type = "pointcloud2";
+  c.source.type = SourceType::kPointCloud2;
   c.source.pointcloud2.domain = int(test_domain());
   c.source.pointcloud2.topic = "/aprt_test/lidar_points";
   c.source.pointcloud2.loopback_only = true;

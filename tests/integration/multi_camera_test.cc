@@ -31,7 +31,7 @@ Config::Camera camera(const std::string& name, const std::string& root, int fram
                       double yaw_deg = 0) {
   Config::Camera cam;
   cam.name = name;
-  cam.source.type = "replay";
+  cam.source.type = SourceType::kReplay;
   cam.source.replay.path = root + "/data/demo_drive";
   cam.source.replay.rate_hz = 0;  // as fast as inference takes frames: none dropped
   cam.source.replay.frames = frames;

@@ -145,7 +145,7 @@ class TrainOnDrives(unittest.TestCase):
                 self.assertEqual(cfg2[key], cfg[key], key)
             with open(os.path.join(d, "junk.pth"), "wb") as f:
                 torch.save({"weights": 1}, f)
-            with self.assertRaisesRegex(ValueError, "not a checkpoint"):
+            with self.assertRaisesRegex(ValueError, "neither a checkpoint"):
                 train([os.path.join(d, "noon")], os.path.join(d, "phase3"), minutes=0.01,
                       init=os.path.join(d, "junk.pth"))
             # Two data-parallel workers: the same files, the weights checked equal at the end.

@@ -10,8 +10,8 @@
 #include <random>
 #include <string>
 
-#include "drivers/can/dbc.h"
-#include "drivers/can/pose_can_codec.h"
+#include "drivers/output/can/dbc.h"
+#include "drivers/output/can/pose_can_codec.h"
 #include "runtime/base/allocation_counter.h"
 
 #ifndef APRT_SOURCE_DIR

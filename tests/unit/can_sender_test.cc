@@ -6,7 +6,7 @@
 #include <cerrno>
 #include <vector>
 
-#include "drivers/can/pose_can_sender.h"
+#include "drivers/output/can/pose_can_sender.h"
 #include "runtime/base/allocation_counter.h"
 
 namespace aprt::can {

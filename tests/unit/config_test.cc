@@ -150,7 +150,7 @@ fusion: {max_position_spread_m: 3, min_agreeing: 2, max_frame_skew_ms: 15}
   EXPECT_EQ(c->fusion.min_agreeing, 2);
   EXPECT_EQ(c->fusion.max_frame_skew_ms, 15.0);
   // The first camera is mirrored into the single-camera fields.
-  EXPECT_EQ(c->source.type, "v4l2");
+  EXPECT_EQ(c->source.type, SourceType::kV4l2);
   EXPECT_EQ(c->source.v4l2.format, "MJPEG");
   EXPECT_EQ(c->extrinsics.sensor_xyz[0], 1.5);
   EXPECT_EQ(camera_list(*c).size(), 2u);
@@ -194,7 +194,7 @@ TEST(Config, Libcamera) {
       "format: NV12, role: video, fps: 20, buffers: 6}\n",
       "test.yaml");
   ASSERT_TRUE(c) << c.error().message();
-  EXPECT_EQ(c->source.type, "libcamera");
+  EXPECT_EQ(c->source.type, SourceType::kLibcamera);
   EXPECT_EQ(c->source.libcamera.camera, "0");
   EXPECT_EQ(c->source.libcamera.width, 1280);
   EXPECT_EQ(c->source.libcamera.format, "NV12");
@@ -259,7 +259,7 @@ TEST(Config, ShippedConfigurationsParse) {
     ASSERT_TRUE(c) << name << ": " << c.error().message();
   }
   auto ecu = load_config(std::string(APRT_SOURCE_DIR) + "/config/aprt.yaml");
-  EXPECT_EQ(ecu->source.type, "v4l2");
+  EXPECT_EQ(ecu->source.type, SourceType::kV4l2);
   EXPECT_TRUE(ecu->output.can.enabled);
   EXPECT_TRUE(ecu->output.dds.enabled);
   EXPECT_EQ(ecu->model[0], '/');  // the service's working directory is not the data folder

@@ -12,8 +12,8 @@
 #include <cstring>
 #include <vector>
 
-#include "drivers/dds/dds_publisher.h"
-#include "drivers/dds/pointcloud2_reader.h"
+#include "drivers/input/pointcloud2/pointcloud2_reader.h"
+#include "drivers/output/dds/dds_publisher.h"
 #include "ros2_interfaces.h"
 #include "runtime/base/allocation_counter.h"
 

@@ -7,7 +7,7 @@
 #include <cstring>
 #include <vector>
 
-#include "drivers/camera/libcamera_source.h"
+#include "drivers/input/camera/libcamera_source.h"
 
 namespace aprt {
 namespace {

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "drivers/lidar/lidar_sequence.h"
-#include "drivers/lidar/scan_reader.h"
+#include "drivers/input/lidar/lidar_sequence.h"
+#include "drivers/input/lidar/scan_reader.h"
 
 namespace aprt {
 namespace {

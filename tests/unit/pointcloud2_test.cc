@@ -1,4 +1,4 @@
-// sensor_msgs/msg/PointCloud2 decoding (drivers/lidar/pointcloud2_decode.*):
+// sensor_msgs/msg/PointCloud2 decoding (drivers/input/pointcloud2/pointcloud2_decode.*):
 // any point_step and field layout, float64 coordinates, other intensity
 // types, big-endian clouds, row padding; malformed messages refused whole
 // with their reason; NaN and overflow through the point gate; no allocation.
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "drivers/lidar/pointcloud2_decode.h"
+#include "drivers/input/pointcloud2/pointcloud2_decode.h"
 #include "runtime/base/allocation_counter.h"
 
 namespace aprt {

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "drivers/lidar/point_cloud.h"
-#include "drivers/lidar/scan_reader.h"
-#include "drivers/replay/image_decoder.h"
+#include "drivers/codec/image_decoder.h"
+#include "drivers/input/lidar/point_cloud.h"
+#include "drivers/input/lidar/scan_reader.h"
 #include "kernels/preprocess/lidar__ref.h"
 #include "kernels/preprocess/lidar_fast.h"
 #include "kernels/preprocess/lidar_input.h"

@@ -11,9 +11,9 @@
 // jpeglib.h needs FILE and size_t declared first.
 #include <jpeglib.h>
 
-#include "drivers/camera/v4l2_devices.h"
-#include "drivers/camera/v4l2_source.h"
-#include "drivers/replay/image_decoder.h"
+#include "drivers/codec/image_decoder.h"
+#include "drivers/input/camera/v4l2_devices.h"
+#include "drivers/input/camera/v4l2_source.h"
 
 namespace aprt {
 namespace {

@@ -1,0 +1,69 @@
+#include "drivers/input/replay/deeploc_replay.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <new>
+
+#include "runtime/base/check.h"
+
+namespace aprt {
+
+Expected<std::unique_ptr<DeeplocReplay>> DeeplocReplay::open(const char* folder) {
+  std::unique_ptr<DeeplocReplay> r(new (std::nothrow) DeeplocReplay());
+  APRT_ENSURE(r != nullptr, Errc::kOutOfMemory, "replay: out of memory");
+  APRT_ENSURE(std::strlen(folder) < sizeof r->folder_ - 1, Errc::kInvalidArgument,
+              "replay: folder path too long");
+  std::snprintf(r->folder_, sizeof r->folder_, "%s", folder);
+  char path[768];
+  std::snprintf(path, sizeof path, "%s/poses.txt", folder);
+  if (Status st = read_pose_list(path, &r->entries_); !st) return st.error();
+  // Optional recorded times.
+  std::snprintf(path, sizeof path, "%s/times.txt", folder);
+  if (FILE* t = std::fopen(path, "r")) {
+    size_t k = 0;
+    char name[128];
+    double sec;
+    while (k < r->entries_.size() && std::fscanf(t, "%127s %lf", name, &sec) == 2) {
+      if (std::strcmp(name, r->entries_[k].name) != 0) break;
+      r->entries_[k++].time_s = sec;
+    }
+    std::fclose(t);
+    r->has_times_ = k == r->entries_.size();
+  }
+  auto dec = ImageDecoder::create(size_t(64) << 20);
+  if (!dec) return dec.error();
+  r->decoder_ = std::move(dec.value());
+  std::snprintf(path, sizeof path, "%s/%s", folder, r->entries_[0].name);
+  auto first = r->decoder_->probe(path);
+  if (!first) return first.error();
+  r->width_ = first->width;
+  r->height_ = first->height;
+  return r;
+}
+
+Status DeeplocReplay::read(size_t i, FrameBuffer* dst, uint64_t sequence, int64_t capture_ns) {
+  const ReplayEntry& e = entries_[i];
+  char path[768];
+  std::snprintf(path, sizeof path, "%s/%s", folder_, e.name);
+  auto img = decoder_->decode(path, dst->data, dst->capacity);
+  if (!img) return img.error();
+  APRT_ENSURE(img->width == width_ && img->height == height_, Errc::kShapeMismatch,
+              "replay: %s is %dx%d, the sequence is %dx%d", path, img->width, img->height, width_,
+              height_);
+  FrameInfo& f = dst->info;
+  f.sequence = sequence;
+  f.capture_ns = capture_ns;
+  f.width = img->width;
+  f.height = img->height;
+  f.format = PixelFormat::kRgb24;
+  f.stride = size_t(img->width) * 3;
+  f.bytes = img->bytes;
+  f.has_truth = true;
+  for (int k = 0; k < 3; ++k) f.truth_position[k] = e.position[k];
+  for (int k = 0; k < 4; ++k) f.truth_orientation[k] = e.orientation[k];
+  std::snprintf(f.name, sizeof f.name, "%s", e.name);
+  return ok();
+}
+
+}  // namespace aprt

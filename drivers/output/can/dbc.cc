@@ -1,0 +1,182 @@
+#include "drivers/output/can/dbc.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace aprt::can {
+
+uint64_t DbcSignal::raw(const uint8_t* data, size_t bytes) const {
+  uint64_t v = 0;
+  if (little_endian) {
+    for (int i = 0; i < length; ++i) {
+      const int bit = start + i;
+      if (size_t(bit / 8) >= bytes) break;
+      v |= uint64_t((data[bit / 8] >> (bit % 8)) & 1u) << i;
+    }
+  } else {
+    // Motorola: `start` is the most significant bit, counting down within a
+    // byte and on to the next byte.
+    int bit = start;
+    for (int i = 0; i < length; ++i) {
+      if (size_t(bit / 8) >= bytes) break;
+      v = (v << 1) | ((data[bit / 8] >> (bit % 8)) & 1u);
+      bit = (bit % 8 == 0) ? bit + 15 : bit - 1;
+    }
+  }
+  return v;
+}
+
+double DbcSignal::physical(const uint8_t* data, size_t bytes) const {
+  const uint64_t r = raw(data, bytes);
+  double v;
+  if (is_signed && length < 64) {
+    const uint64_t m = uint64_t(1) << (length - 1);
+    v = double(int64_t((r ^ m) - m));
+  } else if (is_signed) {
+    v = double(int64_t(r));
+  } else {
+    v = double(r);
+  }
+  return v * factor + offset;
+}
+
+const DbcSignal* DbcMessage::signal(const std::string& n) const {
+  for (const auto& s : signals) {
+    if (s.name == n) return &s;
+  }
+  return nullptr;
+}
+
+const DbcMessage* Dbc::message(uint32_t id) const {
+  for (const auto& m : messages) {
+    if (m.id == id) return &m;
+  }
+  return nullptr;
+}
+
+const DbcMessage* Dbc::message(const std::string& n) const {
+  for (const auto& m : messages) {
+    if (m.name == n) return &m;
+  }
+  return nullptr;
+}
+
+namespace {
+
+Error bad(const std::string& origin, int line, const char* what) {
+  return Error(Errc::kInvalidArgument, "%s:%d: %s", origin.c_str(), line, what);
+}
+
+}  // namespace
+
+Expected<Dbc> parse_dbc(const std::string& text, const std::string& origin) {
+  Dbc dbc;
+  std::istringstream in(text);
+  std::string line;
+  int lineno = 0;
+  DbcMessage* current = nullptr;
+  while (std::getline(in, line)) {
+    ++lineno;
+    const size_t first = line.find_first_not_of(" \t");
+    if (first == std::string::npos) {
+      current = nullptr;
+      continue;
+    }
+    const std::string body = line.substr(first);
+    if (body.rfind("BO_ ", 0) == 0) {
+      char name[128], sender[128];
+      unsigned long id = 0;
+      int length = 0;
+      if (std::sscanf(body.c_str(), "BO_ %lu %127[^:]: %d %127s", &id, name, &length, sender) !=
+          4) {
+        return bad(origin, lineno, "malformed BO_ line (expected: BO_ <id> <name>: <dlc> <node>)");
+      }
+      DbcMessage m;
+      m.id = uint32_t(id & 0x1FFFFFFF);  // bit 31 marks an extended id in DBC
+      m.name = name;
+      m.length = length;
+      m.sender = sender;
+      dbc.messages.push_back(m);
+      current = &dbc.messages.back();
+    } else if (body.rfind("SG_ ", 0) == 0) {
+      if (!current) return bad(origin, lineno, "SG_ outside a BO_ block");
+      char name[128], order_sign[4], unit[64] = "";
+      int start = 0, length = 0;
+      double factor = 1, offset = 0, lo = 0, hi = 0;
+      // SG_ name : start|length@order sign (factor,offset) [min|max] "unit" receivers
+      const int n =
+          std::sscanf(body.c_str(), "SG_ %127s : %d|%d@%3s (%lf,%lf) [%lf|%lf] \"%63[^\"]\"", name,
+                      &start, &length, order_sign, &factor, &offset, &lo, &hi, unit);
+      if (n < 8) {
+        return bad(origin, lineno,
+                   "malformed SG_ line (expected: SG_ name : start|length@order+/- (factor,offset) "
+                   "[min|max] \"unit\" receivers)");
+      }
+      if (length < 1 || length > 64 || start < 0 || start >= 512 ||
+          (order_sign[0] != '0' && order_sign[0] != '1') ||
+          (order_sign[1] != '+' && order_sign[1] != '-')) {
+        return bad(origin, lineno, "SG_ with an impossible start, length, byte order or sign");
+      }
+      DbcSignal s;
+      s.name = name;
+      s.start = start;
+      s.length = length;
+      s.little_endian = order_sign[0] == '1';
+      s.is_signed = order_sign[1] == '-';
+      s.factor = factor;
+      s.offset = offset;
+      s.min = lo;
+      s.max = hi;
+      s.unit = n >= 9 ? unit : "";
+      if (s.little_endian && start + length > current->length * 8) {
+        return bad(origin, lineno, "SG_ extends past the message's length");
+      }
+      current->signals.push_back(s);
+    } else if (body.rfind("VAL_ ", 0) == 0) {
+      std::istringstream v(body.substr(5));
+      unsigned long id;
+      std::string sig;
+      if (!(v >> id >> sig)) return bad(origin, lineno, "malformed VAL_ line");
+      DbcSignal* target = nullptr;
+      for (auto& m : dbc.messages) {
+        if (m.id == (id & 0x1FFFFFFF)) {
+          for (auto& s : m.signals) {
+            if (s.name == sig) target = &s;
+          }
+        }
+      }
+      if (!target) return bad(origin, lineno, "VAL_ for an unknown message or signal");
+      std::string rest;
+      std::getline(v, rest);
+      const char* p = rest.c_str();
+      for (;;) {
+        char* end = nullptr;
+        const long long key = std::strtoll(p, &end, 10);
+        if (end == p) break;
+        const char* q1 = std::strchr(end, '"');
+        const char* q2 = q1 ? std::strchr(q1 + 1, '"') : nullptr;
+        if (!q2) return bad(origin, lineno, "malformed VAL_ description");
+        target->values[key] = std::string(q1 + 1, q2);
+        p = q2 + 1;
+      }
+    } else {
+      current = nullptr;
+    }
+  }
+  if (dbc.messages.empty())
+    return Error(Errc::kInvalidArgument, "%s: no messages (BO_) in the DBC", origin.c_str());
+  return dbc;
+}
+
+Expected<Dbc> load_dbc(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) return Error(Errc::kIo, "dbc: cannot open '%s'", path.c_str());
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return parse_dbc(ss.str(), path);
+}
+
+}  // namespace aprt::can

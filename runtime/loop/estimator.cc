@@ -1,0 +1,129 @@
+#include "runtime/loop/estimator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace aprt {
+
+Estimator::Estimator(const Config& config, CaptureChannel* const* channels, size_t n)
+    : channels_(channels),
+      n_(n),
+      bounds_margin_(float(config.sanity.bounds_margin)),
+      min_points_(config.source.lidar.min_points),
+      deadline_ns_(int64_t(config.supervisor.inference_deadline_ms * 1e6)),
+      max_jump_m_(config.sanity.max_jump_m),
+      max_speed_mps_(config.sanity.max_speed_mps) {
+  fusion_.max_position_spread_m = config.fusion.max_position_spread_m;
+  fusion_.max_orientation_spread_rad = config.fusion.max_orientation_spread_deg * M_PI / 180.0;
+  fusion_.min_agreeing = config.fusion.min_agreeing;
+}
+
+bool Estimator::fits(size_t i, const FrameBuffer& f) noexcept {
+  const CaptureChannel& c = *channels_[i];
+  return c.scans() || c.input->fit(f.info.format, f.info.width, f.info.height);
+}
+
+// A scan (with the running model's geometry: a reloaded model keeps its
+// input, reload_compatible refuses another) or an image into the input.
+uint32_t Estimator::write_input(size_t i, Engine& engine, const FrameBuffer& f) noexcept {
+  EngineInput& in = *channels_[i]->input;
+  if (!in.scans()) {
+    in.write_image(f.view(), engine);
+    return 0;
+  }
+  const ScanInputResult r = in.write_scan(f.points(), f.info.scan.points, engine);
+  scan_.points = uint32_t(r.points);
+  scan_.dropped = f.info.scan.non_finite + f.info.scan.over_capacity;
+  scan_.clipped = f.info.scan.clipped;
+  scan_.sparse = !r.enough || r.points < size_t(min_points_);
+  if (!scan_.sparse) return 0;
+  ++sparse_scans_;
+  return kPoseSparseScan;
+}
+
+uint32_t Estimator::infer(Engine& engine, const FrameBuffer* const* frames, bool nan_output,
+                          PoseRecord* rec) noexcept {
+  const ModelMeta& m = engine.meta();
+  uint32_t flags = 0;
+  CameraEstimate est[kMaxFusedCameras];
+  for (size_t i = 0; i < n_; ++i) {
+    if (!frames[i]) continue;
+    flags |= write_input(i, engine, *frames[i]);
+    (void)engine.run();
+    if (i == 0 && nan_output) engine.output().f32()[0] = std::numeric_limits<float>::quiet_NaN();
+    const PoseEstimate p = decode_pose(engine.output().f32(), m, bounds_margin_);
+    est[i] = camera_to_base(p, channels_[i]->base_from_sensor);
+    if (n_ == 1) {
+      rec->pose = p;
+      break;
+    }
+    if (p.flags) ++channels_[i]->flagged;
+  }
+  const CaptureChannel& trigger = *channels_[0];
+  if (n_ == 1) {
+    // A pose whose base_link transform is not finite keeps the sensor pose's flags.
+    for (int k = 0; k < 3; ++k) rec->base_position[k] = est[0].position[k];
+    const Eigen::Quaterniond& q = est[0].orientation;
+    rec->base_orientation[0] = q.w();
+    rec->base_orientation[1] = q.x();
+    rec->base_orientation[2] = q.y();
+    rec->base_orientation[3] = q.z();
+    return flags;
+  }
+  const FusionResult fr = fuse_poses(est, int(n_), fusion_);
+  for (int k = 0; k < 3; ++k) rec->base_position[k] = fr.position[k];
+  rec->base_orientation[0] = fr.orientation.w();
+  rec->base_orientation[1] = fr.orientation.x();
+  rec->base_orientation[2] = fr.orientation.y();
+  rec->base_orientation[3] = fr.orientation.z();
+  // The console and the errors against ground truth speak of the trigger
+  // camera: the fused pose as it would have seen it.
+  rec->pose = base_to_sensor(fr.position, fr.orientation, trigger.base_from_sensor);
+  if (!fr.valid) {
+    uint32_t camera_flags = 0;
+    for (size_t i = 0; i < n_; ++i) camera_flags |= est[i].present ? est[i].flags : 0;
+    rec->pose.flags = camera_flags;
+    flags |= kPoseNoQuorum;
+    ++no_quorum_;
+  }
+  FusionSummary& fs = rec->fusion;
+  fs.cameras = uint8_t(n_);
+  fs.present = uint8_t(fr.present);
+  fs.usable = uint8_t(fr.usable);
+  fs.inliers = uint8_t(fr.inliers);
+  fs.inlier_mask = fr.inlier_mask;
+  fs.spread_m = float(fr.spread_m);
+  fs.spread_deg = float(fr.spread_deg);
+  for (size_t i = 0; i < n_; ++i) {
+    fs.deviation_m[i] = float(fr.deviation_m[i]);
+    fs.deviation_deg[i] = float(fr.deviation_deg[i]);
+    if (est[i].present && est[i].flags == 0 && !(fr.inlier_mask & (1u << i))) {
+      ++channels_[i]->outliers;
+    }
+  }
+  return flags;
+}
+
+uint32_t Estimator::check(const PoseRecord& rec, uint32_t flags) noexcept {
+  flags |= rec.pose.flags;
+  if (rec.inference_end_ns - rec.inference_start_ns > deadline_ns_) {
+    flags |= kPoseDeadlineMissed;
+    ++deadline_misses_;
+  }
+  if (have_prev_ && max_jump_m_ > 0 && !(flags & kPoseNonFinite)) {
+    double d = 0;
+    for (int k = 0; k < 3; ++k)
+      d += (rec.pose.position[k] - prev_[k]) * (rec.pose.position[k] - prev_[k]);
+    const double dt = double(rec.capture_ns - prev_ns_) * 1e-9;
+    if (std::sqrt(d) > max_jump_m_ + max_speed_mps_ * std::max(0.0, dt)) flags |= kPoseJump;
+  }
+  if (!(flags & (kPoseNonFinite | kPoseOutOfBounds | kPoseJump | kPoseNoQuorum))) {
+    for (int k = 0; k < 3; ++k) prev_[k] = rec.pose.position[k];
+    prev_ns_ = rec.capture_ns;
+    have_prev_ = true;
+  }
+  return flags;
+}
+
+}  // namespace aprt

@@ -1,0 +1,73 @@
+// One cycle of the loop without its threads: the frames of one cycle (the
+// trigger channel's and, with several cameras, the others') -> the engine's
+// input (EngineInput) -> Engine::run -> decode_pose -> base_link -> fusion ->
+// the checks that make a pose valid or flagged. The inference thread
+// (runtime/loop/runtime.cc) calls it; tests can drive it alone.
+//
+// @rt: every call is bounded by the model and the camera count, allocates
+// nothing and takes no lock.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "drivers/input/frame.h"
+#include "runtime/config/config.h"
+#include "runtime/engine/engine.h"
+#include "runtime/loop/capture.h"
+#include "runtime/loop/pose_record.h"
+#include "runtime/pose/pose_fusion.h"
+
+namespace aprt {
+
+// What the last LiDAR scan gave (diagnostics).
+struct ScanNote {
+  uint32_t points = 0, dropped = 0, clipped = 0;
+  bool sparse = false;
+};
+
+class Estimator {
+ public:
+  // channels: the run's channels (configuration order), n of them.
+  Estimator(const Config& config, CaptureChannel* const* channels, size_t n);
+
+  // Whether channel i's frame fits its engine input (a camera that
+  // renegotiated is re-planned); false: the frame is skipped.
+  bool fits(size_t i, const FrameBuffer& f) noexcept;
+
+  // Runs `engine` on the cycle's frames (frames[i]: channel i's, or null
+  // when it had none in time) and fills rec->pose, rec->base_* and, with
+  // several cameras, rec->fusion; returns the cycle's loop flags so far
+  // (sparse scan, no quorum). nan_output: fault injection (the first
+  // camera's output becomes NaN).
+  uint32_t infer(Engine& engine, const FrameBuffer* const* frames, bool nan_output,
+                 PoseRecord* rec) noexcept;
+
+  // The checks that need the whole cycle: the pose's own flags, the deadline
+  // (rec's inference times) and the jump from the last accepted pose; the
+  // history advances only with a pose that passed. Returns all flags.
+  uint32_t check(const PoseRecord& rec, uint32_t flags) noexcept;
+
+  const ScanNote& last_scan() const { return scan_; }
+  uint64_t sparse_scans() const { return sparse_scans_; }
+  uint64_t no_quorum() const { return no_quorum_; }
+  uint64_t deadline_misses() const { return deadline_misses_; }
+
+ private:
+  uint32_t write_input(size_t i, Engine& engine, const FrameBuffer& f) noexcept;
+
+  CaptureChannel* const* channels_;
+  size_t n_;
+  float bounds_margin_;
+  int min_points_;
+  int64_t deadline_ns_;
+  double max_jump_m_, max_speed_mps_;
+  FusionParams fusion_;
+  bool have_prev_ = false;
+  double prev_[3] = {};
+  int64_t prev_ns_ = 0;
+  ScanNote scan_;
+  uint64_t sparse_scans_ = 0, no_quorum_ = 0, deadline_misses_ = 0;
+};
+
+}  // namespace aprt
