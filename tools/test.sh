@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # aprt tests.
-#   tools/test.sh            the default run: format check, then every test except
-#                            the slow suites, on the ASan+UBSan build (~1 minute)
+#   tools/test.sh            the default run: format and layer checks, then every
+#                            test except the slow suites, on the ASan+UBSan build
 #   tools/test.sh --slow     full-size golden models (224 and 128) on the release build
 #   tools/test.sh --fuzz N   the model-file fuzzer for N seconds, the PointCloud2 one N/2 (clang, libFuzzer)
 #   tools/test.sh --tsan     the threaded engine and the supervised loop under ThreadSanitizer
@@ -21,6 +21,7 @@ jobs=$(nproc)
 case "${1:-}" in
   "")
     tools/check_format.sh
+    tools/check_layers.py
     cmake --preset asan >/dev/null
     cmake --build --preset asan -j "$jobs"
     ctest --preset asan -LE slow --timeout 900

@@ -1,7 +1,6 @@
-// Built instead of dds_domain.cc and dds_listener.cc when Cyclone DDS is not
+// Built instead of dds_domain.cc when Cyclone DDS is not
 // found for the target.
 #include "drivers/dds/dds_domain.h"
-#include "drivers/dds/dds_listener.h"
 
 namespace aprt {
 
@@ -20,21 +19,6 @@ Error dds_failure(const char* what, int32_t) {
 Expected<int32_t> dds_join(uint32_t, bool, int32_t* domain_handle) {
   *domain_handle = 0;
   return dds_failure("join", 0);
-}
-
-Expected<std::unique_ptr<DdsListener>> DdsListener::create(const DdsOptions&) {
-  return Error(Errc::kUnsupported,
-               "dds: this build has no DDS (Cyclone DDS was not found when it was configured)");
-}
-DdsListener::~DdsListener() = default;
-int DdsListener::take_poses(DdsReceivedPose*, int, int64_t) {
-  return 0;
-}
-int DdsListener::take_status(DdsReceivedStatus*, int) {
-  return 0;
-}
-int DdsListener::publishers() const {
-  return 0;
 }
 
 }  // namespace aprt

@@ -13,7 +13,7 @@
 #include <ctime>
 #include <string>
 
-#include "drivers/dds/dds_listener.h"
+#include "drivers/output/dds/dds_listener.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
 #include "runtime/config/config.h"

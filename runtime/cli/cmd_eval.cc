@@ -17,9 +17,9 @@
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
 #include "runtime/cli/eval_inputs.h"
-#include "runtime/cli/load_model.h"
+#include "runtime/cli/open_model.h"
 #include "runtime/engine/engine.h"
-#include "runtime/pose/pose_decode.h"
+#include "runtime/engine/pose_decode.h"
 
 namespace aprt::cli {
 namespace {
@@ -102,12 +102,12 @@ int cmd_eval(int argc, char** argv) {
     std::fprintf(stderr, "aprt eval: usage: aprt eval --model MODEL --data DIR [--csv FILE]\n");
     return 2;
   }
-  std::unique_ptr<Engine> engine = load_model("eval", model_path, int(threads), isa);
+  std::unique_ptr<Engine> engine = open_model("eval", model_path, int(threads), isa);
   if (!engine) return 2;
   Engine& e = *engine;
   Compared cmp;
   if (compare_path) {
-    cmp.engine = load_model("eval", compare_path, int(threads), isa);
+    cmp.engine = open_model("eval", compare_path, int(threads), isa);
     if (!cmp.engine) return 2;
     if (!same_input(e.meta(), cmp.engine->meta())) {
       std::fprintf(stderr,

@@ -19,10 +19,10 @@
 #include "kernels/preprocess/preprocess_image.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
-#include "runtime/cli/load_model.h"
+#include "runtime/cli/open_model.h"
 #include "runtime/engine/engine.h"
 #include "runtime/engine/engine_input.h"
-#include "runtime/pose/pose_decode.h"
+#include "runtime/engine/pose_decode.h"
 
 namespace aprt::cli {
 namespace {
@@ -98,7 +98,7 @@ int cmd_infer(int argc, char** argv) {
                  pixels.size(), bytes, width, height, format_name.c_str());
     return 2;
   }
-  std::unique_ptr<Engine> engine = load_image_model("infer", model, int(threads), isa);
+  std::unique_ptr<Engine> engine = open_model("infer", model, int(threads), isa, uint32_t(format::Modality::kImage));
   if (!engine) return 2;
   Engine& e = *engine;
   const ModelMeta& m = e.meta();

@@ -17,7 +17,7 @@
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
 #include "runtime/cli/eval_inputs.h"
-#include "runtime/cli/load_model.h"
+#include "runtime/cli/open_model.h"
 #include "runtime/engine/engine.h"
 
 namespace aprt::cli {
@@ -67,7 +67,7 @@ int cmd_inputs(int argc, char** argv) {
                  args.error() ? args.error() : "--model, --data and --out are required");
     return 2;
   }
-  std::unique_ptr<Engine> engine = load_model("inputs", model_path, 1, isa);
+  std::unique_ptr<Engine> engine = open_model("inputs", model_path, 1, isa);
   if (!engine) return 2;
   Engine& e = *engine;
   std::unique_ptr<EvalInputs> inputs = open_eval_inputs(data, e);

@@ -51,7 +51,7 @@ std::string source_text(const Config::Source& s) {
 
 int check_only(const std::string& path, const Config& cfg) {
   std::string note;
-  auto engine = load_model(cfg, &note);
+  auto engine = load_model(model_request(cfg), &note);
   if (!engine) {
     std::fprintf(stderr, "aprt run: %s: model: %s\n", path.c_str(), engine.error().message());
     return 2;

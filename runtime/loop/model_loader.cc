@@ -6,15 +6,19 @@
 
 namespace aprt {
 
-EngineOptions engine_options(const Config& config) {
-  EngineOptions eo;
+ModelRequest model_request(const Config& config) {
+  ModelRequest r;
+  r.path = config.model;
+  EngineOptions& eo = r.engine;
   eo.threads = config.engine.threads;
   eo.isa = config.engine.isa.c_str();
   eo.cpus = config.engine.cpus.empty() ? nullptr : config.engine.cpus.data();
   eo.n_cpus = int(config.engine.cpus.size());
   // The model's modality is checked against the configured source by
   // model_fits_source(), which can name the remedy.
-  return eo;
+  r.public_key = config.model_signing.public_key;
+  r.require_signature = config.model_signing.required;
+  return r;
 }
 
 Status model_fits_source(const ModelMeta& m, const Config::Source& src, const std::string& model) {
@@ -26,22 +30,21 @@ Status model_fits_source(const ModelMeta& m, const Config::Source& src, const st
                lidar_model ? "use lidar_replay or pointcloud2" : "use replay, v4l2 or libcamera");
 }
 
-Expected<std::unique_ptr<Engine>> load_model(const Config& config, std::string* note) {
-  const char* path = config.model.c_str();
+Expected<std::unique_ptr<Engine>> load_model(const ModelRequest& request, std::string* note) {
+  const char* path = request.path.c_str();
   auto bytes = Engine::read_model_file(path);
   if (!bytes) return bytes.error();
-  const Config::ModelSigning& ms = config.model_signing;
-  if (!ms.public_key.empty()) {
-    const std::string sig = signature_path(config.model);
+  if (!request.public_key.empty()) {
+    const std::string sig = signature_path(request.path);
     const bool has_sig = access(sig.c_str(), F_OK) == 0;
-    if (!has_sig && ms.required) {
+    if (!has_sig && request.require_signature) {
       return Error(Errc::kInvalidArgument,
                    "model: '%s' has no signature (%s) and model_signing.required is set; sign it "
                    "with `aprt sign %s --key KEY.key`",
                    path, sig.c_str(), path);
     }
     if (has_sig) {
-      auto key = read_public_key(ms.public_key);
+      auto key = read_public_key(request.public_key);
       if (!key) return key.error();
       if (Status s = verify_signature(bytes->data(), bytes->size(), sig, *key); !s) {
         Error e = s.error();
@@ -53,7 +56,7 @@ Expected<std::unique_ptr<Engine>> load_model(const Config& config, std::string* 
       *note = "warning: no signature (" + sig + "); model_signing.required is off";
     }
   }
-  auto e = Engine::load_memory(bytes->data(), bytes->size(), engine_options(config));
+  auto e = Engine::load_memory(bytes->data(), bytes->size(), request.engine);
   if (!e) {
     Error err = e.error();
     err.with_context("%s", path);

@@ -15,10 +15,22 @@
 
 namespace aprt {
 
-EngineOptions engine_options(const Config& config);
+// What to load: the file, the engine's options, and the signature policy.
+struct ModelRequest {
+  std::string path;
+  EngineOptions engine;
+  std::string public_key;          // empty: signatures not checked
+  bool require_signature = false;  // an unsigned model is refused
+};
 
-// `note` receives a line for the log when a signature was checked or skipped.
-Expected<std::unique_ptr<Engine>> load_model(const Config& config, std::string* note);
+// The configured model (model, engine.*, model_signing.*).
+ModelRequest model_request(const Config& config);
+
+// The one way a model file becomes an engine: read once, its signature
+// checked on exactly those bytes when the request has a key, loaded with
+// the request's options. `note` receives a line for the log when a
+// signature was checked or skipped.
+Expected<std::unique_ptr<Engine>> load_model(const ModelRequest& request, std::string* note);
 
 // ok() when `next` can replace `running` between two frames.
 // A camera model needs a camera source, a LiDAR model a LiDAR one (the message

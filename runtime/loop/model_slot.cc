@@ -21,7 +21,7 @@ void ModelSlot::service() {
     return;
   }
   std::string note;
-  auto next = load_model(config_, &note);
+  auto next = load_model(model_request(config_), &note);
   Status fits = next ? reload_compatible(engine_->meta(), next.value()->meta()) : ok();
   if (!next || !fits) {
     ++refused_;

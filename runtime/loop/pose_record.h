@@ -3,11 +3,11 @@
 
 #include <cstdint>
 
-#include "runtime/pose/pose_decode.h"
+#include "runtime/engine/pose_decode.h"
 
 namespace aprt {
 
-// Flags the loop adds to the pose's own (runtime/pose/pose_decode.h, bits 0..3).
+// Flags the loop adds to the pose's own (runtime/engine/pose_decode.h, bits 0..3).
 inline constexpr uint32_t kPoseStaleFrame = 1u << 8;      // frame older than frame_timeout
 inline constexpr uint32_t kPoseDeadlineMissed = 1u << 9;  // inference over its deadline
 inline constexpr uint32_t kPoseJump = 1u << 10;           // implausible jump from the last pose

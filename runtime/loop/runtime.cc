@@ -21,7 +21,7 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
   r->config_ = config;
   const Config& c = r->config_;
   std::string note;
-  auto engine = load_model(c, &note);
+  auto engine = load_model(model_request(c), &note);
   if (!engine) return engine.error();
   if (!note.empty()) std::fprintf(stderr, "aprt run: %s: %s\n", c.model.c_str(), note.c_str());
   r->models_.reset(new (std::nothrow) ModelSlot(c, std::move(engine.value())));
@@ -229,6 +229,8 @@ int Runtime::run() {
     std::fprintf(stderr, "aprt run: warning: mlockall failed (%s); memory may be paged\n",
                  std::strerror(errno));
   }
+  // From here a broken invariant in any thread is a FAULT (exit code 3).
+  const FatalHandler previous = install_fault_handler(config_.supervisor.systemd);
   started_ns_ = monotonic_ns();
   shared_.inference_beat = shared_.publish_beat = started_ns_;
   for (auto& c : channels_) c->beat = started_ns_;
@@ -241,6 +243,7 @@ int Runtime::run() {
       !(inference_started_ = true)) {
     std::fprintf(stderr, "aprt run: %s\n", s.error().message());
     request_stop();
+    set_fatal_handler(previous);
     return 1;
   }
   for (auto& c : channels_) {
@@ -251,6 +254,7 @@ int Runtime::run() {
                            c->thread_name.c_str()))) {
       std::fprintf(stderr, "aprt run: %s\n", s.error().message());
       request_stop();
+      set_fatal_handler(previous);
       return 1;
     }
     c->started = true;
@@ -269,12 +273,13 @@ int Runtime::run() {
     const RunState st = supervision_->tick(h, shared_);
     if (st == RunState::kStopping) break;
     if (st == RunState::kFault) {
-      code = 3;
+      code = kFaultExitCode;
       break;
     }
   }
   request_stop();
   join_threads();
+  set_fatal_handler(previous);
   end_ = {true, allocation_count_ ? allocation_count_() : 0, current_rss_kb()};
   models_->finish();
   duration_s_ = double(monotonic_ns() - started_ns_) * 1e-9;

@@ -4,6 +4,8 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <cstdio>
 #include <cstdlib>
@@ -27,6 +29,30 @@ void sd_notify_text(const char* text) noexcept {
   sendto(fd, text, std::strlen(text), MSG_NOSIGNAL, reinterpret_cast<sockaddr*>(&addr),
          socklen_t(offsetof(sockaddr_un, sun_path) + n));
   close(fd);
+}
+
+namespace {
+
+std::atomic<bool> g_fault_systemd{false};
+
+void fault_handler(const char* file, int line, const char* message) {
+  // Async-signal-safe enough for a dying process: fixed buffers, write(2), _exit(2).
+  char text[320];
+  const int n = std::snprintf(text, sizeof text, "aprt run: state FAULT (fatal: %s at %s:%d)\n",
+                              message, file, line);
+  if (n > 0) (void)!write(STDERR_FILENO, text, size_t(std::min(n, int(sizeof text) - 1)));
+  if (g_fault_systemd.load()) {
+    std::snprintf(text, sizeof text, "STATUS=FAULT: fatal: %s", message);
+    sd_notify_text(text);
+  }
+  _exit(kFaultExitCode);
+}
+
+}  // namespace
+
+FatalHandler install_fault_handler(bool systemd) noexcept {
+  g_fault_systemd.store(systemd);
+  return set_fatal_handler(&fault_handler);
 }
 
 Expected<std::unique_ptr<Supervision>> Supervision::create(const Config& config) {

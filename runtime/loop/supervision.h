@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "drivers/watchdog/watchdog_device.h"
+#include "runtime/base/check.h"
 #include "runtime/config/config.h"
 #include "runtime/loop/loop_shared.h"
 #include "runtime/loop/supervisor.h"
@@ -51,6 +52,13 @@ class Supervision {
   StateChange changes_[kMaxStateChanges] = {};
   size_t count_ = 0;
 };
+
+// Makes a broken invariant (APRT_ENFORCE, runtime/base/check.h) in any of the
+// loop's threads a FAULT: the reason on stderr and to systemd, then the
+// process ends with FAULT's exit code 3 at once -- without the watchdog's
+// magic close, so a supervised ECU resets. Returns the previous handler.
+FatalHandler install_fault_handler(bool systemd) noexcept;
+inline constexpr int kFaultExitCode = 3;
 
 // systemd's notification protocol (sd_notify(3)): one datagram to
 // $NOTIFY_SOCKET; nothing when it is not set.

@@ -24,7 +24,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
-#include "runtime/pose/pose_decode.h"
+#include "runtime/engine/pose_decode.h"
 #include "runtime/pose/pose_geometry.h"
 
 namespace aprt {

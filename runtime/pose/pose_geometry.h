@@ -13,7 +13,7 @@
 
 #include <Eigen/Geometry>
 
-#include "runtime/pose/pose_decode.h"
+#include "runtime/engine/pose_decode.h"
 
 namespace aprt {
 

@@ -123,7 +123,7 @@ class TrainingInputs(unittest.TestCase):
         import os
         import tempfile
 
-        from aprt_tools.train import load_points_sequence
+        from aprt_tools.train_data import load_points_sequence
 
         with tempfile.TemporaryDirectory() as d:
             os.makedirs(os.path.join(d, "lidar"))

@@ -1,3 +1,4 @@
+#include "runtime/loop/supervision.h"
 #include "runtime/loop/supervisor.h"
 
 #include <gtest/gtest.h>
@@ -81,6 +82,18 @@ TEST(Supervisor, EndOfStreamStops) {
   Health h = healthy(kMs * 1000);
   h.end_of_stream = true;
   EXPECT_EQ(s.step(h), RunState::kStopping);
+}
+
+// A broken invariant in any of the loop's threads ends the process as a
+// FAULT: the reason on stderr and exit code 3 (runtime/loop/supervision.h).
+TEST(FaultHandler, BrokenInvariantEndsTheProcessAsFault) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        install_fault_handler(false);
+        APRT_ENFORCE(1 + 1 == 3, "arena overrun");
+      },
+      ::testing::ExitedWithCode(kFaultExitCode), "state FAULT \\(fatal: arena overrun at .*");
 }
 
 }  // namespace

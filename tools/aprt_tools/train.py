@@ -22,165 +22,12 @@ import time
 import numpy as np
 import torch
 from torch import nn
-from torch.nn import functional as F
 
-from .dataset import load_image, orientation_error_deg, read_poses
+from .dataset import orientation_error_deg
 from .model.apr_transformer import AprConfig, AprTransformer
-from .preprocess import crop_resize, normalise
-
-
-class PoseLoss(nn.Module):
-    # Both terms start with the same weight exp(3): the position is normalised to
-    # [0, 1] per axis, so its L1 error is of the quaternion's order. PoseNet's
-    # s_x = 0 (for positions in metres) starves the position here: the shared
-    # trunk follows the 20x stronger orientation gradient and position stays at
-    # the mean for thousands of steps (measured on the synthetic town).
-    def __init__(self, s_x: float = -3.0, s_q: float = -3.0):
-        super().__init__()
-        self.s_x = nn.Parameter(torch.tensor(s_x))
-        self.s_q = nn.Parameter(torch.tensor(s_q))
-        self.norm_weight = 1.0
-
-    def forward(self, pred, pos_gt, q_gt):
-        l_p = (pred[:, :3] - pos_gt).abs().sum(dim=1).mean()
-        raw_q = pred[:, 3:7]
-        q = F.normalize(raw_q, dim=1)
-        l_q = torch.minimum((q - q_gt).abs().sum(dim=1), (q + q_gt).abs().sum(dim=1)).mean()
-        loss = l_p * torch.exp(-self.s_x) + self.s_x + l_q * torch.exp(-self.s_q) + self.s_q
-        # Keep the raw quaternion near unit length: the runtime's sanity check
-        # flags |q| outside [0.5, 2] as an output the network was not trained
-        # to give (runtime/pose/pose_decode.cc); without this term the norm
-        # drifts freely, as the loss above only sees the normalised q.
-        loss = loss + self.norm_weight * ((raw_q.norm(dim=1) - 1.0) ** 2).mean()
-        if pred.shape[1] == 13:
-            loss = loss + uncertainty_nll(pred, pos_gt, q_gt)
-        return loss, l_p.detach(), l_q.detach()
-
-
-def rotation_error_vector(q_pred: torch.Tensor, q_gt: torch.Tensor) -> torch.Tensor:
-    """(N, 3) rotation taking the true camera orientation to the predicted one,
-    as an axis-angle vector in the camera frame (x forward, y left, z up: z is
-    about yaw): 2 atan2(|v|, w) v / |v| of conj(q_gt) * q_pred, sign-free."""
-    q = F.normalize(q_pred, dim=1)
-    w1, v1 = q_gt[:, :1], q_gt[:, 1:]
-    w2, v2 = q[:, :1], q[:, 1:]
-    w = w1 * w2 + (v1 * v2).sum(dim=1, keepdim=True)
-    v = w1 * v2 - w2 * v1 - torch.cross(v1, v2, dim=1)
-    sign = torch.where(w < 0, -1.0, 1.0)
-    w, v = w * sign, v * sign
-    n = v.norm(dim=1, keepdim=True).clamp(min=1e-12)
-    return v / n * 2 * torch.atan2(n, w)
-
-
-def uncertainty_nll(pred, pos_gt, q_gt) -> torch.Tensor:
-    """Laplace negative log-likelihood of the pose's errors under the
-    confidence heads' scales b = exp(s): |e| / b + s per axis. The errors are
-    detached: the heads learn how wrong the pose is, and never make it
-    worse to look certain (Kendall & Gal 2017's heteroscedastic loss, with the
-    mean held fixed)."""
-    e_pos = (pred[:, :3] - pos_gt).detach().abs()
-    e_rot = rotation_error_vector(pred[:, 3:7].detach(), q_gt).abs()
-    s = pred[:, 7:13].clamp(-14.0, 6.0)
-    e = torch.cat([e_pos, e_rot], dim=1)
-    return (e * torch.exp(-s) + s).sum(dim=1).mean() * 0.1
-
-
-def load_sequence(folder: str, size: int):
-    poses = read_poses(folder)
-    imgs = torch.empty((len(poses), 3, size, size), dtype=torch.uint8)
-    for i, (name, _, _) in enumerate(poses):
-        imgs[i] = (crop_resize(load_image(folder, name), size) * 255.0 + 0.5).clamp(0, 255).to(torch.uint8)
-    pos = torch.tensor(np.stack([p for _, p, _ in poses]), dtype=torch.float32)
-    quat = torch.tensor(np.stack([q / np.linalg.norm(q) for _, _, q in poses]), dtype=torch.float32)
-    return imgs, pos, quat
-
-
-def load_lidar_sequence(folder: str, grid: int, bev: dict):
-    """LiDAR scans (lidar_poses.txt + KITTI .bin) as BEV histograms stored like
-    images: uint8 = round(255 * value); the clip counts used here (1..255
-    dividing 255 or not) come back as value = round(255 k / clip) / 255."""
-    from .lidar_bev import bev_histogram, read_kitti
-
-    poses = read_poses(folder, "lidar_poses.txt")
-    imgs = torch.empty((len(poses), 2, grid, grid), dtype=torch.uint8)
-    for i, (name, _, _) in enumerate(poses):
-        h = bev_histogram(read_kitti(os.path.join(folder, name)), grid, bev)
-        imgs[i] = torch.from_numpy(np.rint(h * 255.0).astype(np.uint8)).permute(2, 0, 1)
-    pos = torch.tensor(np.stack([p for _, p, _ in poses]), dtype=torch.float32)
-    quat = torch.tensor(np.stack([q / np.linalg.norm(q) for _, _, q in poses]), dtype=torch.float32)
-    return imgs, pos, quat
-
-
-def load_points_sequence(folder: str, points: dict, log=print, inputs: str | None = None,
-                         every: int = 1):
-    """LiDAR scans (lidar_poses.txt + KITTI .bin) as the raw-points input
-    (lidar_points.py: crop, farthest-point sampling, features): float32
-    (N, 6, samples, 1), computed once (no augmentation for LiDAR). With
-    `inputs`, the array `aprt inputs --every EVERY` wrote of the same sequence
-    (the runtime's own preprocessing, the same values, ~15x faster)."""
-    from .lidar_bev import read_kitti
-    from .lidar_points import points_features_many
-
-    poses = read_poses(folder, "lidar_poses.txt")[::every]
-    if inputs:
-        arr = np.load(inputs, mmap_mode="r")
-        want = (len(poses), points["samples"], 1, 6)
-        if tuple(arr.shape) != want:
-            raise ValueError(f"{inputs} has shape {list(arr.shape)}; {folder} with every {every} "
-                             f"and {points['samples']} samples needs {list(want)} (aprt inputs "
-                             f"--model MODEL --data {folder} --every {every})")
-        feats = np.ascontiguousarray(arr[:, :, 0, :], np.float32)
-        log(f"train: {len(poses)} scans' inputs from {inputs}")
-    else:
-        feats = np.zeros((len(poses), points["samples"], 6), np.float32)
-        chunk = 256
-        for a in range(0, len(poses), chunk):
-            scans = [read_kitti(os.path.join(folder, name)) for name, _, _ in poses[a:a + chunk]]
-            feats[a:a + chunk], _ = points_features_many(scans, points["samples"], points)
-            log(f"train: sampled {min(a + chunk, len(poses))}/{len(poses)} scans")
-    x = torch.from_numpy(feats).permute(0, 2, 1).unsqueeze(-1).contiguous()
-    pos = torch.tensor(np.stack([p for _, p, _ in poses]), dtype=torch.float32)
-    quat = torch.tensor(np.stack([q / np.linalg.norm(q) for _, _, q in poses]), dtype=torch.float32)
-    return x, pos, quat
-
-
-def network_input(frames: torch.Tensor, cfg) -> torch.Tensor:
-    """What the network sees of stored frames: points as they are; images and
-    histograms stored as uint8, scaled and normalised."""
-    if cfg.points:
-        return frames
-    return normalise(frames.float() / 255.0, cfg.mean, cfg.std)
-
-
-def augment(x: torch.Tensor, gen: torch.Generator, strength: float = 1.0) -> torch.Tensor:
-    """x: (N, 3, S, S) in [0, 1]; lighting and sensor changes, never geometry.
-
-    strength in [0, 1] blends between the clean and the fully augmented image."""
-    if strength <= 0.0:
-        return x
-    clean = x
-    n = x.shape[0]
-    r = lambda *shape: torch.rand(*shape, generator=gen)
-    gain = 0.75 + 0.5 * r(n, 3, 1, 1)
-    bright = 0.5 + 0.8 * r(n, 1, 1, 1)
-    x = x * gain * bright
-    mean = x.mean(dim=(1, 2, 3), keepdim=True)
-    x = (x - mean) * (0.6 + 0.8 * r(n, 1, 1, 1)) + mean
-    haze = 0.35 * r(n, 1, 1, 1)
-    haze_color = 0.4 + 0.5 * r(n, 3, 1, 1)
-    x = x * (1 - haze) + haze_color * haze
-    x = x.clamp(0, 1) ** (0.8 + 0.45 * r(n, 1, 1, 1))
-    x = x + 0.02 * torch.randn(x.shape, generator=gen)
-    return (clean + strength * (x.clamp(0, 1) - clean)).clamp(0, 1)
-
-
-def split_holdout(n: int, fraction: float = 0.1):
-    """Train / validation indices: a contiguous stretch of the route is held out."""
-    k = max(1, int(n * fraction))
-    start = (n - k) // 2
-    val = np.arange(start, start + k)
-    train = np.concatenate([np.arange(0, max(0, start - 5)), np.arange(start + k + 5, n)])
-    return train, val
+from .preprocess import normalise
+from .train_data import _load, augment, network_input, split_holdout
+from .train_loss import PoseLoss
 
 
 @torch.no_grad()
@@ -196,21 +43,6 @@ def evaluate(model, imgs, pos, quat, lo, hi, batch=32, mean=None, std=None):
             oe.append(orientation_error_deg(y[k, 3:7].numpy(), quat[i + k].numpy()))
     model.train()
     return np.array(pe), np.array(oe)
-
-
-def _load(folders, modality, size, cfg, log, inputs, inputs_every):
-    """The frames, positions and quaternions of one or more sequences, concatenated."""
-    parts = []
-    for folder in folders:
-        if modality == "bev":
-            parts.append(load_lidar_sequence(folder, size, cfg.bev))
-        elif modality == "points":
-            parts.append(load_points_sequence(folder, cfg.points, log, inputs, inputs_every))
-        else:
-            parts.append(load_sequence(folder, size))
-    if len(parts) == 1:
-        return parts[0]
-    return tuple(torch.cat([p[k] for p in parts]) for k in range(3))
 
 
 def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 16,

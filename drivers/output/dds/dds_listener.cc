@@ -1,4 +1,4 @@
-#include "drivers/dds/dds_listener.h"
+#include "drivers/output/dds/dds_listener.h"
 
 #include <dds/dds.h>
 

@@ -1,4 +1,4 @@
-#include "runtime/pose/pose_decode.h"
+#include "runtime/engine/pose_decode.h"
 
 #include <cmath>
 #include <cstdio>
