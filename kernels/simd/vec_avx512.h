@@ -1,6 +1,6 @@
 // 16-lane float vectors on AVX-512F. The including file has included
 // <immintrin.h> and <cstdint> at global scope. Include only inside a translation unit
-// compiled for AVX-512 (kernels/x86/*__avx512.cc), inside that ISA's namespace,
+// compiled for AVX-512 (the *__simd.cc files, kernels/simd/isa.h), inside that ISA's namespace,
 // so no inline function from here is ever merged with another ISA's.
 
 using V = __m512;

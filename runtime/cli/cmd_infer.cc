@@ -98,7 +98,8 @@ int cmd_infer(int argc, char** argv) {
                  pixels.size(), bytes, width, height, format_name.c_str());
     return 2;
   }
-  std::unique_ptr<Engine> engine = open_model("infer", model, int(threads), isa, uint32_t(format::Modality::kImage));
+  std::unique_ptr<Engine> engine =
+      open_model("infer", model, int(threads), isa, uint32_t(format::Modality::kImage));
   if (!engine) return 2;
   Engine& e = *engine;
   const ModelMeta& m = e.meta();

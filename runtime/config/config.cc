@@ -40,8 +40,8 @@ bool source_type_from_name(const std::string& name, SourceType* out) {
 }
 namespace {
 
-using yaml::Node;
 using config::Reader;
+using yaml::Node;
 
 Status read_transform(Reader& r, const Node* parent, const char* name, double xyz[3],
                       double rpy[3]) {

@@ -365,10 +365,17 @@ class ModelFileParser {
     APRT_ENSURE(in.dims[0] == 1, Errc::kUnsupported, "model_bin: batch size %u (only 1)",
                 in.dims[0]);
     const TensorEntry& out = file_.tensors_[file_.output_];
-    APRT_ENSURE(out.dtype == DType::kF32 && out.numel == 7, Errc::kBadGraph,
-                "model_bin: output '%s' must be 7 f32 values (x y z qw qx qy qz), has %llu %s",
+    APRT_ENSURE(out.dtype == DType::kF32 && (out.numel == 7 || out.numel == 13), Errc::kBadGraph,
+                "model_bin: output '%s' must be 7 f32 values (x y z qw qx qy qz), or 13 with "
+                "the confidence outputs, has %llu %s",
                 out.name, static_cast<unsigned long long>(out.numel),
                 format::dtype_name(out.dtype));
+    APRT_ENSURE((out.numel == 13) == file_.meta_.has_uncertainty, Errc::kBadMetadata, "%s",
+                out.numel == 13
+                    ? "model_bin: the model has confidence outputs but no 'uncertainty' "
+                      "calibration (python3 -m aprt_tools confidence MODEL --val DRIVE)"
+                    : "model_bin: metadata 'uncertainty' without the confidence outputs "
+                      "(the output has 7 values, not 13)");
     return ok();
   }
 

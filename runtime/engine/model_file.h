@@ -36,6 +36,13 @@ struct ModelMeta {
   bool has_val_error = false;
   float val_error_position_m = 0.0f;
   float val_error_orientation_deg = 0.0f;
+  // Per-pose confidence (1.3): the network's outputs 7..12 are the log
+  // Laplace scales of its position (normalised units, per map axis) and
+  // rotation (radians, per camera axis) errors; sigma = scale * sqrt(2) *
+  // exp(output) with these calibration scales (position, rotation), fitted on
+  // the validation drive so that the 95 % regions hold 95 % of its errors.
+  bool has_uncertainty = false;
+  float uncertainty_scale[2] = {0.0f, 0.0f};
   const char* config_json = nullptr;  // points into the file; not NUL-terminated
   size_t config_json_bytes = 0;
   // How the file was quantised (method, calibration set, per-op policy) as

@@ -13,7 +13,7 @@ using format::MetaKey;
 using format::MetaType;
 
 Status parse_model_meta(const uint8_t* data, uint64_t size, ModelMeta* out) {
-ModelMeta& m = *out;
+  ModelMeta& m = *out;
   uint64_t seen = 0;  // bit per known key index
   auto mark = [&](int bit) { seen |= uint64_t(1) << bit; };
   uint64_t pos = 0;
@@ -25,13 +25,11 @@ ModelMeta& m = *out;
     const auto type = static_cast<MetaType>(load<uint16_t>(data + pos + 2));
     const uint32_t len = load<uint32_t>(data + pos + 4);
     APRT_ENSURE(len <= size - pos - 8, Errc::kBadMetadata,
-                "model_bin: META key %u claims %u bytes, past the section end", unsigned(key),
-                len);
+                "model_bin: META key %u claims %u bytes, past the section end", unsigned(key), len);
     const uint8_t* v = data + pos + 8;
     auto expect = [&](MetaType t, uint32_t min_count, uint32_t max_count) -> Status {
-      APRT_ENSURE(type == t, Errc::kBadMetadata,
-                  "model_bin: META key %u has type %u, expected %u", unsigned(key),
-                  unsigned(type), unsigned(t));
+      APRT_ENSURE(type == t, Errc::kBadMetadata, "model_bin: META key %u has type %u, expected %u",
+                  unsigned(key), unsigned(type), unsigned(t));
       const uint32_t unit = (t == MetaType::kU32 || t == MetaType::kF32) ? 4 : 1;
       APRT_ENSURE(len % unit == 0 && len / unit >= min_count && len / unit <= max_count,
                   Errc::kBadMetadata, "model_bin: META key %u has %u bytes (wrong count)",
@@ -96,8 +94,7 @@ ModelMeta& m = *out;
       case MetaKey::kResizePolicy: {
         if (!(st = expect(MetaType::kU32, 1, 1))) return st;
         const uint32_t r = load<uint32_t>(v);
-        APRT_ENSURE(r == 1 || r == 2, Errc::kBadMetadata, "model_bin: unknown resize policy %u",
-                    r);
+        APRT_ENSURE(r == 1 || r == 2, Errc::kBadMetadata, "model_bin: unknown resize policy %u", r);
         m.resize_policy = static_cast<format::ResizePolicy>(r);
         break;
       }
@@ -140,6 +137,18 @@ ModelMeta& m = *out;
         m.has_val_error = true;
         m.val_error_position_m = e[0];
         m.val_error_orientation_deg = e[1];
+        break;
+      }
+      case MetaKey::kUncertainty: {
+        if (!(st = expect(MetaType::kF32, 2, 2))) return st;
+        float k[2] = {0.0f, 0.0f};
+        if (!(st = f32s(k, 2, "uncertainty"))) return st;
+        APRT_ENSURE(k[0] > 0.0f && k[0] <= 1e3f && k[1] > 0.0f && k[1] <= 1e3f, Errc::kBadMetadata,
+                    "model_bin: uncertainty calibration scales %g, %g (each in (0, 1000])",
+                    double(k[0]), double(k[1]));
+        m.has_uncertainty = true;
+        m.uncertainty_scale[0] = k[0];
+        m.uncertainty_scale[1] = k[1];
         break;
       }
       case MetaKey::kConfigJson:
@@ -185,9 +194,9 @@ ModelMeta& m = *out;
     }
     pos += 8 + ((uint64_t(len) + 3) & ~uint64_t(3));
   }
-  static const char* const kRequired[] = {
-      "producer", "source_sha256", "modality", "input_shape", "norm_mean",  "norm_std",
-      "pose_min", "pose_max",      "d_model",  "nheads",      "enc_layers", "dec_layers"};
+  static const char* const kRequired[] = {"producer",  "source_sha256", "modality",   "input_shape",
+                                          "norm_mean", "norm_std",      "pose_min",   "pose_max",
+                                          "d_model",   "nheads",        "enc_layers", "dec_layers"};
   for (int bit = 0; bit < 12; ++bit) {
     APRT_ENSURE(seen & (uint64_t(1) << bit), Errc::kBadMetadata,
                 "model_bin: required metadata '%s' is missing", kRequired[bit]);
@@ -198,8 +207,7 @@ ModelMeta& m = *out;
                 m.pose_max[i]);
   }
   APRT_ENSURE(m.nheads > 0 && m.d_model > 0 && m.d_model % m.nheads == 0, Errc::kBadMetadata,
-              "model_bin: d_model %u is not a positive multiple of nheads %u", m.d_model,
-              m.nheads);
+              "model_bin: d_model %u is not a positive multiple of nheads %u", m.d_model, m.nheads);
   APRT_ENSURE(int(m.input_shape[3]) == m.norm_channels, Errc::kBadMetadata,
               "model_bin: %d normalisation values for %u input channels", m.norm_channels,
               m.input_shape[3]);

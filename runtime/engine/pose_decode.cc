@@ -6,8 +6,33 @@
 
 namespace aprt {
 
-PoseEstimate decode_pose(const float raw[7], const ModelMeta& meta, float bounds_margin) noexcept {
+namespace {
+
+// Laplace scale b = exp(s) has variance 2 b^2; s is clamped to the range the
+// trainer clamps it to (tools/aprt_tools/train_loss.py).
+double laplace_sigma(float s) {
+  const double c = s < -14.0f ? -14.0 : (s > 6.0f ? 6.0 : double(s));
+  return std::sqrt(2.0) * std::exp(c);
+}
+
+}  // namespace
+
+PoseEstimate decode_pose(const float* raw, const ModelMeta& meta, float bounds_margin) noexcept {
   PoseEstimate p;
+  if (meta.has_uncertainty) {
+    bool finite = true;
+    for (int i = 7; i < 13; ++i) finite = finite && std::isfinite(raw[i]);
+    if (!finite) {
+      p.flags |= kPoseNoConfidence;
+    } else {
+      p.has_sigma = true;
+      for (int i = 0; i < 3; ++i) {
+        p.sigma_position_m[i] = meta.uncertainty_scale[0] * laplace_sigma(raw[7 + i]) *
+                                double(meta.pose_max[i] - meta.pose_min[i]);
+        p.sigma_rotation_rad[i] = meta.uncertainty_scale[1] * laplace_sigma(raw[10 + i]);
+      }
+    }
+  }
   for (int i = 0; i < 7; ++i) {
     if (!std::isfinite(raw[i])) p.flags |= kPoseNonFinite;
   }
@@ -40,10 +65,10 @@ const char* pose_flags_text(uint32_t flags, char* buf, int size) noexcept {
     return buf;
   }
   static const char* const kNames[] = {"non-finite", "quat-degenerate", "quat-norm",
-                                       "out-of-bounds"};
+                                       "out-of-bounds", "no-confidence"};
   int used = 0;
   buf[0] = '\0';
-  for (int bit = 0; bit < 4; ++bit) {
+  for (int bit = 0; bit < 5; ++bit) {
     if (!(flags & (1u << bit))) continue;
     used += std::snprintf(buf + used, size > used ? size - used : 0, "%s%s", used ? "," : "",
                           kNames[bit]);

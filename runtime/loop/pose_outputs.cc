@@ -106,6 +106,7 @@ void PoseOutputs::publish(const PoseRecord& r, int64_t now_ns,
                           int64_t realtime_offset_ns) noexcept {
   if (!dds_ && !can_sender_) return;
   last_ = geometry_->from_base(r.base_position, r.base_orientation);
+  geometry_->covariance(r.pose, last_.covariance);
   const int64_t stamp_ns =
       r.source_stamp_ns ? r.source_stamp_ns : r.capture_ns + realtime_offset_ns;
   const bool valid = r.flags == 0 && r.state == RunState::kRunning;

@@ -47,6 +47,33 @@ BasePose PoseGeometry::from_base(const double position[3], const double orientat
   return finish(t);
 }
 
+void PoseGeometry::covariance(const PoseEstimate& s, double out[36]) const noexcept {
+  for (int i = 0; i < 36; ++i) out[i] = 0.0;
+  if (!s.has_sigma) {
+    for (int i = 0; i < 3; ++i) {
+      out[i * 6 + i] = var_pos_;
+      out[(i + 3) * 6 + (i + 3)] = var_rot_;
+    }
+    return;
+  }
+  const Eigen::Matrix3d off = offset_.linear();
+  const Eigen::Vector3d sp(s.sigma_position_m[0], s.sigma_position_m[1], s.sigma_position_m[2]);
+  const Eigen::Matrix3d pos = off * sp.cwiseProduct(sp).asDiagonal() * off.transpose();
+  Eigen::Quaterniond q(s.orientation[0], s.orientation[1], s.orientation[2], s.orientation[3]);
+  q.normalize();
+  const Eigen::Matrix3d map_from_camera = off * q.toRotationMatrix();
+  const Eigen::Vector3d sr(s.sigma_rotation_rad[0], s.sigma_rotation_rad[1],
+                           s.sigma_rotation_rad[2]);
+  const Eigen::Matrix3d rot =
+      map_from_camera * sr.cwiseProduct(sr).asDiagonal() * map_from_camera.transpose();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      out[r * 6 + c] = pos(r, c);
+      out[(r + 3) * 6 + (c + 3)] = rot(r, c);
+    }
+  }
+}
+
 BasePose PoseGeometry::finish(const Eigen::Isometry3d& base_in_map) noexcept {
   const Eigen::Isometry3d base = offset_ * base_in_map;
   BasePose out;

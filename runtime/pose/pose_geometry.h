@@ -7,8 +7,9 @@
 // the training map frame), T_base_sensor the sensor's mounting on the vehicle
 // (extrinsic), T_offset an optional transform from the training map frame to
 // the ECU's. Quaternions stay unit length and continuous (the sign that is
-// closest to the previous output). The covariance is the model's isotropic
-// validation error (or the configuration's), the same in every frame.
+// closest to the previous output). The covariance is the model's own for the
+// frame where the model file has confidence outputs (FORMAT.md 1.3);
+// otherwise its isotropic validation error (or the configuration's).
 #pragma once
 
 #include <Eigen/Geometry>
@@ -43,6 +44,12 @@ class PoseGeometry {
   // estimate: the extrinsic applied once, where cameras are fused): only the
   // map offset, continuity and covariance. @rt.
   BasePose from_base(const double position[3], const double orientation[4]) noexcept;
+  // The covariance of one estimate from the model's own confidence
+  // (sensor.has_sigma): the position's per-axis variances rotated by the map
+  // offset, the rotation's (about the camera's axes) into the ECU's map frame
+  // -- ROS's fixed-axis convention. The constant validation error otherwise.
+  // @rt.
+  void covariance(const PoseEstimate& sensor, double out[36]) const noexcept;
   void reset_continuity() { have_previous_ = false; }
 
  private:

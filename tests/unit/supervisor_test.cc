@@ -1,7 +1,8 @@
-#include "runtime/loop/supervision.h"
 #include "runtime/loop/supervisor.h"
 
 #include <gtest/gtest.h>
+
+#include "runtime/loop/supervision.h"
 
 namespace aprt {
 namespace {
@@ -87,7 +88,6 @@ TEST(Supervisor, EndOfStreamStops) {
 // A broken invariant in any of the loop's threads ends the process as a
 // FAULT: the reason on stderr and exit code 3 (runtime/loop/supervision.h).
 TEST(FaultHandler, BrokenInvariantEndsTheProcessAsFault) {
-  GTEST_FLAG_SET(death_test_style, "threadsafe");
   EXPECT_EXIT(
       {
         install_fault_handler(false);

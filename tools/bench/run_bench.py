@@ -13,7 +13,11 @@ quantised (python3 -m aprt_tools quantize, calibrated on frames of
 data/demo_drive; default policy) and aprt int8 runs in the same rounds.
 
   tools/bench/run_bench.py [--sizes 224,128] [--threads 1,2] [--rounds 5] [--runs 20] [--no-int8]
-                           [--bev] [--points]
+                           [--bev] [--points] [--compare-aprt OTHER_BUILD/bin/aprt]
+
+--compare-aprt runs a second aprt binary in the same rounds (a build of an
+earlier commit): the before/after table a change that must not cost speed
+is judged by.
 
 --points adds the LiDAR raw-points model (4096 points, PointNet++ and the same
 transformers): aprt runs its model_bin, ONNX Runtime the same network exported
@@ -130,6 +134,9 @@ def main():
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--runs", type=int, default=20, help="timed runs per round and peer")
     ap.add_argument("--aprt", default=os.path.join(ROOT, "build", "release", "bin", "aprt"))
+    ap.add_argument("--compare-aprt", metavar="PATH",
+                    help="a second aprt binary (e.g. a build of an earlier commit) measured in "
+                         "the same rounds: before/after medians and minima")
     ap.add_argument("--models", default=os.path.join(ROOT, "build", "bench"))
     ap.add_argument("--markdown", help="also write the table to this file")
     ap.add_argument("--no-int8", action="store_true", help="fp32 only")
@@ -155,6 +162,10 @@ def main():
     ort = {(s, t): [] for s in sizes for t in threads}
     ours = {(s, t): [] for s in sizes for t in threads}
     int8 = {(s, t): [] for s in sizes for t in threads}
+    before = {(s, t): [] for s in sizes for t in threads}  # --compare-aprt, fp32
+    before8 = {(s, t): [] for s in sizes for t in threads}  # --compare-aprt, int8
+    if a.compare_aprt and not os.path.exists(a.compare_aprt):
+        sys.exit(f"run_bench: {a.compare_aprt} not found")
     # (int8 of the points model: not measured; its policy is the image model's)
     int8_models = {} if a.no_int8 else {s: ensure_int8(models[s], a.attention) for s in sizes
                                          if s != "points"}
@@ -166,9 +177,16 @@ def main():
                 ms, d = run_aprt(a.aprt, os.path.join(models[s], "model.aprt"), t, a.runs)
                 ours[(s, t)] += ms
                 info[(s, t)] = d
+                if a.compare_aprt:
+                    ms, _ = run_aprt(a.compare_aprt, os.path.join(models[s], "model.aprt"), t,
+                                     a.runs)
+                    before[(s, t)] += ms
                 if s in int8_models:
                     ms, _ = run_aprt(a.aprt, int8_models[s], t, a.runs)
                     int8[(s, t)] += ms
+                    if a.compare_aprt:
+                        ms, _ = run_aprt(a.compare_aprt, int8_models[s], t, a.runs)
+                        before8[(s, t)] += ms
         print(f"run_bench: round {r + 1}/{a.rounds} done", flush=True)
     now = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
     head = (f"ONNX Runtime (onnxruntime-node 1.30.0, graph optimisation 'all', sequential) vs aprt, "
@@ -211,6 +229,21 @@ def main():
             fast.append(row)
     table = (head + "\n\n" + "\n".join(lines) + "\n\nFastest run of each (the host's noise only adds):\n\n" +
              "\n".join(fast) + "\n")
+    if a.compare_aprt:
+        cmp = [f"Before ({a.compare_aprt}) and after ({a.aprt}), the same rounds:", "",
+               "| input | threads | model | before median ms | after median ms | after / before |"
+               " before min ms | after min ms | after / before at min |",
+               "|---|---:|---|---:|---:|---:|---:|---:|---:|"]
+        for s in sizes:
+            for t in threads:
+                for kind, b, n in (("fp32", before, ours), ("int8", before8, int8)):
+                    if not b[(s, t)] or not n[(s, t)]:
+                        continue
+                    bm, nm = statistics.median(b[(s, t)]), statistics.median(n[(s, t)])
+                    bn, nn = min(b[(s, t)]), min(n[(s, t)])
+                    cmp.append(f"| {input_label(s)} | {t} | {kind} | {bm:.1f} | {nm:.1f} | "
+                               f"{nm / bm:.3f} | {bn:.1f} | {nn:.1f} | {nn / bn:.3f} |")
+        table += "\n" + "\n".join(cmp) + "\n"
     print()
     print(table)
     if a.markdown:

@@ -32,8 +32,8 @@
 #include <vector>
 
 #include "tools/synth/drive.h"
-#include "tools/synth/options.h"
 #include "tools/synth/lighting.h"
+#include "tools/synth/options.h"
 #include "tools/synth/raycast.h"
 #include "tools/synth/town.h"
 

@@ -2,7 +2,7 @@
 
 Layouts: feature maps are NHWC ([1, H, W, C]); token matrices are row-major
 with the feature axis last. `run()` below is the numpy statement of every
-op's semantics; the C++ reference kernels in kernels/ref/ implement the same
+op's semantics; the C++ reference kernels (kernels/<family>/*__ref) implement the same
 and the converter checks each lowered graph against ONNX with it.
 """
 

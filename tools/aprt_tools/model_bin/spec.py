@@ -6,7 +6,7 @@ tests/tools/test_spec_agreement.py checks that the two agree.
 
 MAGIC = b"APRTMDL\x00"
 VERSION_MAJOR = 1
-VERSION_MINOR = 2  # 1.1: int8 weights, 'quantization'; 1.2: the PointNet++ ops, 'points'
+VERSION_MINOR = 3  # 1.1: int8 weights, 'quantization'; 1.2: the PointNet++ ops, 'points'; 1.3: 'uncertainty'
 HEADER_BYTES = 64
 SECTION_ENTRY_BYTES = 32
 TENSOR_ENTRY_BYTES = 64
@@ -83,6 +83,8 @@ META_KEYS = {
     40: (T_F32, "val_error"),  # median position error (m), orientation error (deg)
     41: (T_STR, "config_json"),
     42: (T_STR, "quantization"),  # JSON: method, calibration set, per-op policy
+    # 1.3: the calibration scales (position, rotation) of the confidence outputs 7..12
+    43: (T_F32, "uncertainty"),
     # LiDAR BEV (modality 2): cell_m, x_min, y_min, height_threshold_m, clip_count
     50: (T_F32, "bev"),
     # LiDAR points (modality 3): crop_radius_m, coord_scale_m
