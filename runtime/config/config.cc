@@ -326,10 +326,24 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(r.boolean(sv, "supervisor", "systemd", &c.supervisor.systemd));
 
     const Node* sa = root->get("sanity");
-    APRT_TRY(r.map(sa, "sanity", {"bounds_margin", "max_jump_m", "max_speed_mps"}));
+    APRT_TRY(r.map(sa, "sanity", {"bounds_margin", "max_jump_m", "max_speed_mps", "track"}));
     APRT_TRY(r.num(sa, "sanity", "bounds_margin", 0, 10, &c.sanity.bounds_margin));
     APRT_TRY(r.num(sa, "sanity", "max_jump_m", 0, 1e6, &c.sanity.max_jump_m));
     APRT_TRY(r.num(sa, "sanity", "max_speed_mps", 0, 1000, &c.sanity.max_speed_mps));
+    const Node* tr = sa ? sa->get("track") : nullptr;
+    const char* tp = "sanity.track";
+    Config::Sanity::Track& t = c.sanity.track;
+    APRT_TRY(r.map(tr, tp,
+                   {"enabled", "max_radius_m", "max_yaw_deg", "gate_m", "gate_deg",
+                    "gate_growth_mps", "confirm", "lost_after"}));
+    APRT_TRY(r.boolean(tr, tp, "enabled", &t.enabled));
+    APRT_TRY(r.num(tr, tp, "max_radius_m", 0.1, 1e4, &t.max_radius_m));
+    APRT_TRY(r.num(tr, tp, "max_yaw_deg", 0.1, 180, &t.max_yaw_deg));
+    APRT_TRY(r.num(tr, tp, "gate_m", 0.1, 1e4, &t.gate_m));
+    APRT_TRY(r.num(tr, tp, "gate_deg", 0.1, 180, &t.gate_deg));
+    APRT_TRY(r.num(tr, tp, "gate_growth_mps", 0, 1000, &t.gate_growth_mps));
+    APRT_TRY(r.integer(tr, tp, "confirm", 1, 1000, &t.confirm));
+    APRT_TRY(r.integer(tr, tp, "lost_after", 1, 100000, &t.lost_after));
 
     const Node* th = root->get("threads");
     APRT_TRY(

@@ -162,6 +162,18 @@ struct Config {
     double bounds_margin = 0.1;   // of the map extent, each side
     double max_jump_m = 30.0;     // between consecutive poses (0: off)
     double max_speed_mps = 60.0;  // jump allowance grows with time since the last pose
+    // The validity gate (runtime/pose/pose_gate.h): the model's own confidence
+    // and the agreement with the vehicle's motion decide what goes out valid.
+    struct Track {
+      bool enabled = true;
+      double max_radius_m = 8.0;  // 95 % horizontal radius the model may state
+      double max_yaw_deg = 10.0;  // 95 % yaw half-interval the model may state
+      double gate_m = 6.0;        // from the track's constant-velocity prediction
+      double gate_deg = 10.0;
+      double gate_growth_mps = 2.0;  // the gate widens with the time since the last accepted
+      int confirm = 5;               // consistent estimates in a row that start a track
+      int lost_after = 25;           // refusals in a row that end it
+    } track;
   } sanity;
 
   struct Threads {

@@ -17,6 +17,22 @@ Estimator::Estimator(const Config& config, CaptureChannel* const* channels, size
   fusion_.max_position_spread_m = config.fusion.max_position_spread_m;
   fusion_.max_orientation_spread_rad = config.fusion.max_orientation_spread_deg * M_PI / 180.0;
   fusion_.min_agreeing = config.fusion.min_agreeing;
+  gate_ = PoseGate(pose_gate_params(config));
+}
+
+PoseGateParams pose_gate_params(const Config& config) {
+  const Config::Sanity::Track& t = config.sanity.track;
+  PoseGateParams p;
+  p.enabled = t.enabled;
+  p.max_position_radius_m = t.max_radius_m;
+  p.max_yaw_interval_deg = t.max_yaw_deg;
+  p.gate_m = t.gate_m;
+  p.gate_deg = t.gate_deg;
+  p.gate_growth_mps = t.gate_growth_mps;
+  p.max_speed_mps = config.sanity.max_speed_mps;
+  p.confirm = t.confirm;
+  p.lost_after = t.lost_after;
+  return p;
 }
 
 bool Estimator::fits(size_t i, const FrameBuffer& f) noexcept {
@@ -123,7 +139,10 @@ uint32_t Estimator::check(const PoseRecord& rec, uint32_t flags) noexcept {
     prev_ns_ = rec.capture_ns;
     have_prev_ = true;
   }
-  return flags;
+  // A frame that came late or stale says nothing against the track's motion;
+  // everything else the pose itself or the fusion flagged is not used by it.
+  const uint32_t own = flags & ~(kPoseStaleFrame | kPoseDeadlineMissed);
+  return flags | gate_.check(rec.pose, double(rec.capture_ns) * 1e-9, own);
 }
 
 }  // namespace aprt

@@ -17,6 +17,7 @@
 #include "runtime/loop/capture.h"
 #include "runtime/loop/pose_record.h"
 #include "runtime/pose/pose_fusion.h"
+#include "runtime/pose/pose_gate.h"
 
 namespace aprt {
 
@@ -25,6 +26,9 @@ struct ScanNote {
   uint32_t points = 0, dropped = 0, clipped = 0;
   bool sparse = false;
 };
+
+// The validity gate's parameters from the configuration (sanity.track).
+PoseGateParams pose_gate_params(const Config& config);
 
 class Estimator {
  public:
@@ -44,8 +48,10 @@ class Estimator {
                  PoseRecord* rec) noexcept;
 
   // The checks that need the whole cycle: the pose's own flags, the deadline
-  // (rec's inference times) and the jump from the last accepted pose; the
-  // history advances only with a pose that passed. Returns all flags.
+  // (rec's inference times), the jump from the last accepted pose, and the
+  // validity gate (the model's confidence, the agreement with the motion:
+  // runtime/pose/pose_gate.h); the history advances only with a pose that
+  // passed. Returns all flags.
   uint32_t check(const PoseRecord& rec, uint32_t flags) noexcept;
 
   const ScanNote& last_scan() const { return scan_; }
@@ -63,6 +69,7 @@ class Estimator {
   int64_t deadline_ns_;
   double max_jump_m_, max_speed_mps_;
   FusionParams fusion_;
+  PoseGate gate_;
   bool have_prev_ = false;
   double prev_[3] = {};
   int64_t prev_ns_ = 0;

@@ -7,10 +7,21 @@
 #include <cstdint>
 
 #include "runtime/loop/pose_record.h"
+#include "runtime/loop/spsc_ring.h"
 
 namespace aprt {
 
+// A state change as the supervisor made it (reason: a static string).
+struct StateChange {
+  RunState state;
+  const char* reason;
+  int64_t at_ns;
+};
+
 struct LoopShared {
+  // supervisor -> publish thread: state changes to print in order with the
+  // poses (one console stream; output.console). A full ring drops the line.
+  SpscRing<StateChange, 16> state_lines;
   std::atomic<bool> stop{false};
   // inference thread
   std::atomic<bool> inference_done{false};

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "runtime/base/clock.h"
+#include "runtime/pose/pose_gate.h"
 
 namespace aprt {
 
@@ -59,6 +60,17 @@ void Publisher::publish_status(double last_inference_ms,
   outputs_.publish_status(st, realtime_ns());
 }
 
+// The supervisor's state changes, on the console's stream between the poses.
+void Publisher::print_state_lines() const noexcept {
+  StateChange c;
+  bool any = false;
+  while (shared_.state_lines.pop(&c)) {
+    std::printf("aprt run: state %s (%s)\n", run_state_name(c.state), c.reason);
+    any = true;
+  }
+  if (any) std::fflush(stdout);
+}
+
 void Publisher::run() noexcept {
   PoseRecord r;
   const int64_t status_period = int64_t(1e9 / config_.output.status_rate_hz);
@@ -71,6 +83,7 @@ void Publisher::run() noexcept {
       next_status += status_period;
       publish_status(last_inference_ms, last_fusion);
     }
+    print_state_lines();
     if (!ring_.pop(&r)) {
       if (shared_.inference_done.load(std::memory_order_acquire) && ring_.size() == 0) break;
       if (shared_.stop.load(std::memory_order_acquire) && ring_.size() == 0) break;
@@ -107,7 +120,7 @@ void Publisher::run() noexcept {
 }
 
 void Publisher::print_pose(const PoseRecord& r) const {
-  char flags[96];
+  char flags[160];
   pose_flags_text(r.flags & 0xff, flags, sizeof flags);
   const auto add = [&](const char* what) {
     std::strncat(flags, what, sizeof flags - std::strlen(flags) - 1);
@@ -117,6 +130,9 @@ void Publisher::print_pose(const PoseRecord& r) const {
   if (r.flags & kPoseJump) add(",jump");
   if (r.flags & kPoseNoQuorum) add(",no-quorum");
   if (r.flags & kPoseSparseScan) add(",sparse");
+  if (r.flags & kPoseUncertain) add(",uncertain");
+  if (r.flags & kPoseInconsistent) add(",inconsistent");
+  if (r.flags & kPoseUnconfirmed) add(",unconfirmed");
   if (r.fusion.cameras > 1) {  // agreeing / configured cameras
     char cams[24];
     std::snprintf(cams, sizeof cams, " cams %u/%u", unsigned(r.fusion.inliers),

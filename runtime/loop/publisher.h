@@ -43,6 +43,9 @@ class Publisher {
     return error_count_;
   }
   uint64_t injected_publish_failures() const { return injected_publish_failures_; }
+  // The supervisor's state changes not printed yet (the thread calls it
+  // between poses; the runtime once more after the threads ended).
+  void print_state_lines() const noexcept;
 
  private:
   void print_pose(const PoseRecord& r) const;

@@ -280,6 +280,7 @@ int Runtime::run() {
   request_stop();
   join_threads();
   set_fatal_handler(previous);
+  publisher_->print_state_lines();  // the last change (STOPPING, FAULT) after the last pose
   end_ = {true, allocation_count_ ? allocation_count_() : 0, current_rss_kb()};
   models_->finish();
   duration_s_ = double(monotonic_ns() - started_ns_) * 1e-9;

@@ -83,7 +83,9 @@ RunState Supervision::tick(const Health& h, LoopShared& shared) noexcept {
     std::snprintf(msg, sizeof msg, "STATUS=%s: %s", run_state_name(st), sm_.reason());
     if (cfg_.systemd) sd_notify_text(msg);
     if (st != RunState::kRunning || last_ != RunState::kStarting) {
-      std::fprintf(stderr, "aprt run: state %s (%s)\n", run_state_name(st), sm_.reason());
+      if (!console_ || !shared.state_lines.push({st, sm_.reason(), h.now_ns})) {
+        std::fprintf(stderr, "aprt run: state %s (%s)\n", run_state_name(st), sm_.reason());
+      }
     }
     last_ = st;
   }

@@ -17,13 +17,6 @@
 
 namespace aprt {
 
-// A state change as the supervisor made it (reason: a static string).
-struct StateChange {
-  RunState state;
-  const char* reason;
-  int64_t at_ns;
-};
-
 class Supervision {
  public:
   static constexpr size_t kMaxStateChanges = 64;
@@ -44,9 +37,11 @@ class Supervision {
   }
 
  private:
-  explicit Supervision(const Config& config) : cfg_(config.supervisor), sm_(config.supervisor) {}
+  explicit Supervision(const Config& config)
+      : cfg_(config.supervisor), sm_(config.supervisor), console_(config.output.console) {}
   Config::Supervisor cfg_;
   Supervisor sm_;
+  bool console_;  // state lines go through the publish thread, in order with the poses
   std::unique_ptr<WatchdogDevice> watchdog_;
   RunState last_ = RunState::kStarting;
   StateChange changes_[kMaxStateChanges] = {};

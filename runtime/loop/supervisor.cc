@@ -49,8 +49,8 @@ RunState Supervisor::step(const Health& h) noexcept {
     problem = "inference deadline missed";
   } else if (h.last_flags & (kPoseNonFinite | kPoseQuatDegenerate | kPoseQuatNorm)) {
     problem = "network output not sane";
-  } else if (h.last_flags & (kPoseOutOfBounds | kPoseJump)) {
-    problem = "pose implausible (outside the map or a jump)";
+  } else if (h.last_flags & kPoseOutOfBounds) {
+    problem = "pose implausible (outside the map)";
   } else if (h.last_flags & kPoseStaleFrame) {
     problem = "frames arrive late";
   } else if (outputs_failing) {
@@ -63,7 +63,20 @@ RunState Supervisor::step(const Health& h) noexcept {
       set(RunState::kFault, problem);
     }
   } else if (h.poses > 0) {
-    set(RunState::kRunning, "ok");
+    // A pose the validity gate withholds is normal operation (the model is
+    // not sure, or disagrees with the motion): the state stays RUNNING and
+    // the reason says why the pose did not go out as valid.
+    const char* why = "ok";
+    if (h.last_flags & kPoseJump) {
+      why = "ok; pose withheld: an implausible jump from the last pose";
+    } else if (h.last_flags & kPoseUncertain) {
+      why = "ok; pose withheld: the model is not confident enough";
+    } else if (h.last_flags & kPoseInconsistent) {
+      why = "ok; pose withheld: it disagrees with the vehicle's motion";
+    } else if (h.last_flags & kPoseUnconfirmed) {
+      why = "ok; pose withheld: no confirmed track yet";
+    }
+    set(RunState::kRunning, why);
   }
   return state_;
 }

@@ -8,6 +8,7 @@
 
 #include "runtime/config/config.h"
 #include "runtime/loop/pose_record.h"
+#include "runtime/pose/pose_gate.h"
 
 namespace aprt {
 

@@ -55,8 +55,30 @@ TEST(Supervisor, FlaggedPosesDegrade) {
   h.last_flags = kPoseDeadlineMissed;
   EXPECT_EQ(s.step(h), RunState::kDegraded);
   EXPECT_STREQ(s.reason(), "inference deadline missed");
-  h.last_flags = kPoseJump;
+  h.last_flags = kPoseOutOfBounds;
   EXPECT_EQ(s.step(h), RunState::kDegraded);
+}
+
+// A pose the validity gate withholds is the model's mistake, not the system's:
+// RUNNING, with the reason the pose did not go out valid.
+TEST(Supervisor, WithheldPosesKeepRunningAndSayWhy) {
+  Supervisor s(cfg());
+  Health h = healthy(kMs * 1000);
+  const struct {
+    uint32_t flags;
+    const char* reason;
+  } cases[] = {
+      {kPoseJump, "ok; pose withheld: an implausible jump from the last pose"},
+      {kPoseUncertain, "ok; pose withheld: the model is not confident enough"},
+      {kPoseInconsistent, "ok; pose withheld: it disagrees with the vehicle's motion"},
+      {kPoseUnconfirmed, "ok; pose withheld: no confirmed track yet"},
+      {0, "ok"},
+  };
+  for (const auto& c : cases) {
+    h.last_flags = c.flags;
+    EXPECT_EQ(s.step(h), RunState::kRunning);
+    EXPECT_STREQ(s.reason(), c.reason);
+  }
 }
 
 TEST(Supervisor, LongDegradationBecomesFault) {

@@ -170,11 +170,33 @@ def cmd_train(a):
         f.write(export_onnx(model, 13))
     a.onnx, a.output, a.config_json = f"{a.out}/model.onnx", f"{a.out}/model.aprt", f"{a.out}/model.json"
     cmd_convert(a)
+    if cfg.uncertainty:  # the confidence outputs' calibration, on the validation drive
+        if not a.val:
+            print("train: --uncertainty needs --val (the confidence is calibrated on it); "
+                  f"{a.out}/model.aprt is not loadable until `aprt_tools confidence` runs",
+                  file=sys.stderr)
+            sys.exit(2)
+        a.model, a.output = f"{a.out}/model.aprt", f"{a.out}/model.aprt"
+        cmd_confidence(a)
     if a.int8:  # calibrated on the (first) training sequence itself (frames spread over it)
         a.model, a.calibration, a.output = f"{a.out}/model.aprt", a.data[0], f"{a.out}/model_int8.aprt"
         a.method, a.percentile, a.frames, a.fp32_ops = "percentile", 99.99, 64, None
         a.backbone = a.sensitivity = a.verbose = a.int8_attention = a.bf16_attention = False
         cmd_quantize(a)
+
+
+def cmd_confidence(a):
+    from .confidence import calibrate_file
+    from .model_bin.reader import ModelBinError
+
+    try:
+        blob, report = calibrate_file(open(a.model, "rb").read(), a.val)
+    except (ModelBinError, OSError, ValueError) as e:
+        print(f"confidence: {a.model}: {e}", file=sys.stderr)
+        sys.exit(2)
+    with open(a.output or a.model, "wb") as f:
+        f.write(blob)
+    print(f"confidence: {a.output or a.model}: {report}")
 
 
 def cmd_config(a):
@@ -280,6 +302,13 @@ def main(argv=None):
                    help="also measure each op alone in int8 (which ops cost accuracy)")
     q.add_argument("-v", "--verbose", action="store_true", help="print each int8 op's range")
     q.set_defaults(fn=cmd_quantize)
+
+    cf = sub.add_parser("confidence", help="calibrate a model's per-pose confidence on a "
+                                           "validation drive (model_bin 1.3 'uncertainty')")
+    cf.add_argument("model", help="a model file with confidence outputs (train --uncertainty)")
+    cf.add_argument("--val", required=True, help="a labelled drive no training used")
+    cf.add_argument("-o", "--output", help="where to write (default: the model file itself)")
+    cf.set_defaults(fn=cmd_confidence)
 
     t = sub.add_parser("train", help="train the reference model on a DeepLoc-layout sequence (CPU)")
     t.add_argument("--data", required=True, nargs="+",

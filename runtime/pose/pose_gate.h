@@ -1,0 +1,85 @@
+// Whether an estimate may go out as valid: the model's own confidence for the
+// frame, and the estimate's agreement with the vehicle's recent motion.
+//
+// An absolute pose regressor is right most of the time and, now and then,
+// confidently on the wrong street (a view down one street looks like a view
+// down another). An initialiser fed such a pose converges to the wrong place,
+// so a pose is valid only when
+//   - its 95 % position radius (the model's sigma, FORMAT.md 1.3) and its 95 %
+//     yaw interval are within the configured limits (kPoseUncertain), and
+//   - it continues a track of estimates that agree with a constant-velocity
+//     motion: within a gate of the track's prediction in position and yaw
+//     (kPoseInconsistent), the track having been confirmed by `confirm`
+//     mutually consistent estimates in a row (kPoseUnconfirmed).
+// Estimates that disagree do not move the track; after `lost_after` of them
+// in a row the track is dropped and a new one must be confirmed -- a run of
+// consistent estimates elsewhere (the vehicle really was elsewhere: a
+// relocalisation) takes over the same way.
+//
+// Pure and allocation-free: the loop's estimator and `aprt eval` run the same
+// gate over the same estimates.
+#pragma once
+
+#include <cstdint>
+
+#include "runtime/engine/pose_decode.h"
+
+namespace aprt {
+
+inline constexpr uint32_t kPoseUncertain = 1u << 13;     // the model's own sigma is too large
+inline constexpr uint32_t kPoseInconsistent = 1u << 14;  // disagrees with the vehicle's motion
+inline constexpr uint32_t kPoseUnconfirmed = 1u << 15;   // no confirmed track yet
+
+struct PoseGateParams {
+  bool enabled = true;
+  double max_position_radius_m = 8.0;  // 95 % horizontal radius the model may state
+  double max_yaw_interval_deg = 10.0;  // 95 % yaw half-interval
+  double gate_m = 6.0;                 // distance from the track's prediction
+  double gate_deg = 10.0;              // yaw difference from the track's prediction
+  double gate_growth_mps = 2.0;        // the gate widens with the time since the last accepted
+  double max_speed_mps = 60.0;         // a track's velocity is capped at this
+  int confirm = 5;                     // consistent estimates in a row that start a track
+  int lost_after = 25;                 // rejections in a row that end it
+};
+
+class PoseGate {
+ public:
+  explicit PoseGate(const PoseGateParams& p = {}) : p_(p) {}
+
+  // The gate's flags for an estimate at time t_s (seconds, monotonic) whose
+  // own flags are `flags` (an estimate already flagged is not used). @rt.
+  uint32_t check(const PoseEstimate& e, double t_s, uint32_t flags) noexcept;
+  void reset() noexcept;
+
+  bool tracking() const { return track_.count >= p_.confirm; }
+
+  // A run of mutually consistent estimates: the newest kWindow of them (at
+  // most kWindowS seconds back) give the constant-velocity prediction (least
+  // squares in x, y and unwrapped yaw).
+  struct Track {
+    static constexpr int kWindow = 32;
+    static constexpr double kWindowS = 1.5;
+    double t[kWindow] = {}, x[kWindow] = {}, y[kWindow] = {}, yaw[kWindow] = {};
+    int head = 0, size = 0;  // ring
+    int count = 0;           // estimates it has taken in all
+    int rejected = 0;        // estimates it refused in a row
+    void clear() { head = size = count = rejected = 0; }
+    void add(double t, double x, double y, double yaw) noexcept;
+    // Predicted x, y, yaw at time tq.
+    void predict(double tq, double max_speed, double* px, double* py, double* pyaw) const noexcept;
+    double last_t() const { return t[(head + kWindow - 1) % kWindow]; }
+    double last_yaw() const { return yaw[(head + kWindow - 1) % kWindow]; }
+  };
+
+ private:
+  bool consistent(const Track& k, double t, double x, double y, double yaw) const noexcept;
+
+  PoseGateParams p_;
+  Track track_;      // confirmed when count >= confirm
+  Track candidate_;  // estimates the track refused, agreeing among themselves
+};
+
+// The yaw (rad) of a w x y z quaternion, about the map's z axis.
+double quaternion_yaw(const double q[4]) noexcept;
+
+}  // namespace aprt
