@@ -62,10 +62,9 @@ int cmd_bench(int argc, char** argv) {
   const long top = args.integer("--top", 15, 1, 100000);
   const char* isa = args.value("--isa");
   const char* path = args.positional();
-  if (args.error() || !path || args.leftover()) {
-    std::fprintf(stderr, "aprt bench: %s%s\n",
-                 args.error() ? "bad or missing value for " : "usage: aprt bench MODEL [options]",
-                 args.error() ? args.error() : "");
+  if (args.refuse("bench")) return 2;
+  if (!path) {
+    std::fprintf(stderr, "aprt bench: missing MODEL (usage: aprt bench MODEL [options])\n");
     return 2;
   }
   EngineOptions opts;

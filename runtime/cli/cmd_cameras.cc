@@ -26,11 +26,7 @@ int cmd_cameras(int argc, char** argv) {
         "  libcamera cameras (index: id), for source.v4l2.device / source.libcamera.camera\n");
     return 0;
   }
-  if (args.error() || args.leftover()) {
-    std::fprintf(stderr, "aprt cameras: bad argument '%s'\n",
-                 args.error() ? args.error() : args.leftover());
-    return 2;
-  }
+  if (args.refuse("cameras")) return 2;
   V4l2DeviceInfo devs[64];
   const int n = list_v4l2_capture_devices(devs, 64);
   std::printf("V4L2 capture devices: %d\n", n);

@@ -204,11 +204,9 @@ int cmd_candump(int argc, char** argv) {
   const long timeout_s = args.integer("--timeout", 0, 0, 1L << 20);
   const bool raw = args.flag("--raw"), quiet = args.flag("--quiet"), strict = args.flag("--strict"),
              tolerate_loss = args.flag("--tolerate-loss");
-  if (args.error() || args.leftover() || (!interface == !log)) {
-    std::fprintf(stderr, "aprt candump: %s (see --help)\n",
-                 args.error()      ? "an option needs a valid value"
-                 : args.leftover() ? "unknown argument"
-                                   : "give exactly one of --interface and --log");
+  if (args.refuse("candump")) return 2;
+  if (!interface == !log) {
+    std::fprintf(stderr, "aprt candump: give exactly one of --interface and --log (see --help)\n");
     return 2;
   }
   auto dbc = can::load_dbc(dbc_path);

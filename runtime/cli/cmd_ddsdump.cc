@@ -55,11 +55,7 @@ int cmd_ddsdump(int argc, char** argv) {
   const long timeout_s = args.integer("--timeout", 10, 1, 86400);
   const long count = args.integer("--count", 0, 1, 100000000);
   const bool quiet = args.flag("--quiet");
-  if (args.error() || args.leftover()) {
-    std::fprintf(stderr, "aprt ddsdump: bad argument '%s' (see aprt ddsdump --help)\n",
-                 args.error() ? args.error() : args.leftover());
-    return 2;
-  }
+  if (args.refuse("ddsdump")) return 2;
   DdsOptions o;
   if (config) {
     auto c = load_config(config);

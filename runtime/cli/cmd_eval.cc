@@ -1,10 +1,14 @@
 // aprt eval --model MODEL --data DIR [--compare MODEL2] [--csv FILE] [--json] [--threads N]
-//           [--isa X] [--limit N]
+//           [--isa X] [--start N] [--every N] [--limit N] [--rate HZ] [--config FILE]
 //
-// Runs the model on every frame of a labelled sequence -- camera (DeepLoc
+// Runs the model on the frames of a labelled sequence -- camera (DeepLoc
 // layout) or, for a LiDAR model (BEV or points), scans (lidar_poses.txt + KITTI/PCD) --
-// and reports position and orientation errors: median, mean, p90, max; per-frame
-// rows with --csv (plot them with `python3 -m aprt_tools plot-eval`). With
+// and reports position and orientation errors (median, mean, p90, p99, max,
+// shares beyond 10 and 50), the same for the poses the validity gate lets out
+// as valid (runtime/pose/pose_gate.h, with the configuration's sanity.track,
+// the sequence's clock from --rate), availability, and how often the
+// published 95 % regions hold the errors; per-frame rows with --csv (plot
+// them with `python3 -m aprt_tools plot-eval`). With
 // --compare (e.g. the int8 model beside its fp32 source) the second model runs
 // on the same preprocessed input: its errors side by side, and the per-frame
 // deviation of its pose from the first model's (p50 / p99 / max).
@@ -17,9 +21,13 @@
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
 #include "runtime/cli/eval_inputs.h"
+#include "runtime/cli/eval_metrics.h"
 #include "runtime/cli/open_model.h"
+#include "runtime/config/config.h"
 #include "runtime/engine/engine.h"
 #include "runtime/engine/pose_decode.h"
+#include "runtime/loop/estimator.h"
+#include "runtime/pose/pose_gate.h"
 
 namespace aprt::cli {
 namespace {
@@ -86,8 +94,17 @@ int cmd_eval(int argc, char** argv) {
         "  --json        summary as one JSON object\n"
         "  --compare M2  also run model M2 (e.g. its int8 version) on the same input:\n"
         "                its errors side by side and its deviation from MODEL\n"
-        "  --limit N     only the first N frames\n"
-        "  --threads N   --isa NAME   as for aprt bench\n");
+        "  --start N     begin at frame N (0-based)\n"
+        "  --every N     take every N-th frame from there\n"
+        "  --limit N     at most N frames\n"
+        "  --rate HZ     the sequence's frame rate for the validity gate's clock\n"
+        "                (default 25, the demo drive's)\n"
+        "  --config FILE the validity gate's parameters (sanity.track, max_jump_m) from\n"
+        "                a configuration (default: the built-in defaults)\n"
+        "  --threads N   --isa NAME   as for aprt bench\n"
+        "A pose is valid when neither the model (non-finite, out of the map, degenerate\n"
+        "quaternion) nor the validity gate (jump, uncertain, inconsistent with the\n"
+        "motion, unconfirmed) flagged it: what aprt run publishes as valid.\n");
     return 0;
   }
   const char* model_path = args.value("--model");
@@ -95,13 +112,28 @@ int cmd_eval(int argc, char** argv) {
   const char* csv_path = args.value("--csv");
   const bool json = args.flag("--json");
   const long limit = args.integer("--limit", 0, 0, 100000000);
+  const long start = args.integer("--start", 0, 0, 100000000);
+  const long every = args.integer("--every", 1, 1, 100000);
+  const double rate = args.number("--rate", 25.0, 0.01, 10000.0);
+  const char* config_path = args.value("--config");
   const long threads = args.integer("--threads", 1, 1, 16);
   const char* isa = args.value("--isa");
   const char* compare_path = args.value("--compare");
-  if (args.error() || !model_path || !data || args.leftover()) {
-    std::fprintf(stderr, "aprt eval: usage: aprt eval --model MODEL --data DIR [--csv FILE]\n");
+  if (args.refuse("eval")) return 2;
+  if (!model_path || !data) {
+    std::fprintf(stderr, "aprt eval: --model and --data are required (aprt eval --help)\n");
     return 2;
   }
+  Config gate_config;
+  if (config_path) {
+    auto c = load_config(config_path);
+    if (!c) {
+      std::fprintf(stderr, "aprt eval: %s\n", c.error().message());
+      return 2;
+    }
+    gate_config = c.value();
+  }
+  PoseGate gate(pose_gate_params(gate_config));
   std::unique_ptr<Engine> engine = open_model("eval", model_path, int(threads), isa);
   if (!engine) return 2;
   Engine& e = *engine;
@@ -129,12 +161,23 @@ int cmd_eval(int argc, char** argv) {
     }
     std::fprintf(csv,
                  "name,x,y,z,qw,qx,qy,qz,gt_x,gt_y,gt_z,gt_qw,gt_qx,gt_qy,gt_qz,"
-                 "position_error_m,orientation_error_deg,flags\n");
+                 "position_error_m,orientation_error_deg,flags,sigma_x_m,sigma_y_m,"
+                 "sigma_yaw_deg\n");
   }
-  const size_t n = limit > 0 ? std::min(size_t(limit), inputs->size()) : inputs->size();
-  std::vector<double> pos_err, rot_err;
+  std::vector<size_t> frames;
+  for (size_t i = size_t(start); i < inputs->size(); i += size_t(every)) {
+    if (limit > 0 && frames.size() >= size_t(limit)) break;
+    frames.push_back(i);
+  }
+  if (frames.empty()) {
+    std::fprintf(stderr, "aprt eval: --start %ld is past the %zu frames of %s\n", start,
+                 inputs->size(), data);
+    return 2;
+  }
+  const size_t n = frames.size();
+  std::vector<EvalSample> samples;
   size_t bad_frames = 0, flagged = 0;
-  for (size_t i = 0; i < n; ++i) {
+  for (const size_t i : frames) {
     EvalFrame f;
     const char* why = "";
     if (!inputs->fill(i, e, &f, &why)) {
@@ -149,8 +192,17 @@ int cmd_eval(int argc, char** argv) {
     if (!p.valid()) ++flagged;
     const double pe = distance(p.position, f.position);
     const double oe = quat_angle_deg(p.orientation, f.orientation);
-    pos_err.push_back(pe);
-    rot_err.push_back(oe);
+    EvalSample smp;
+    smp.t_s = double(i) / rate;
+    smp.position_error_m = pe;
+    smp.orientation_error_deg = oe;
+    const uint32_t all_flags = gate.apply(p, smp.t_s, p.flags);
+    smp.valid = all_flags == 0;
+    smp.has_sigma = p.has_sigma;
+    if (p.has_sigma) {
+      coverage_of(p, f.position, f.orientation, &smp.inside_position, &smp.inside_yaw);
+    }
+    samples.push_back(smp);
     if (cmp.engine) {
       Engine& c = *cmp.engine;
       (void)c.run();
@@ -170,24 +222,22 @@ int cmd_eval(int argc, char** argv) {
     if (csv) {
       std::fprintf(
           csv,
-          "%s,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%u\n",
+          "%s,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%u,"
+          "%.4f,%.4f,%.4f\n",
           f.name, p.position[0], p.position[1], p.position[2], p.orientation[0], p.orientation[1],
           p.orientation[2], p.orientation[3], f.position[0], f.position[1], f.position[2],
-          f.orientation[0], f.orientation[1], f.orientation[2], f.orientation[3], pe, oe, p.flags);
+          f.orientation[0], f.orientation[1], f.orientation[2], f.orientation[3], pe, oe, all_flags,
+          p.sigma_position_m[0], p.sigma_position_m[1], p.sigma_rotation_rad[2] * 180.0 / M_PI);
     }
   }
   if (csv) std::fclose(csv);
-  const Stats ps = stats(pos_err), os = stats(rot_err);
+  const EvalSummary sum = summarise(samples, flagged);
   const Stats cps = stats(cmp.pos_err), cos = stats(cmp.rot_err);
   const Stats dps = stats(cmp.pos_dev), dos = stats(cmp.rot_dev);
   if (json) {
-    std::printf(
-        "{\"model\": \"%s\", \"data\": \"%s\", \"frames\": %zu, \"skipped\": %zu, "
-        "\"flagged\": %zu, \"position_m\": {\"median\": %.4f, \"mean\": %.4f, \"p90\": %.4f, "
-        "\"max\": %.4f}, \"orientation_deg\": {\"median\": %.4f, \"mean\": %.4f, "
-        "\"p90\": %.4f, \"max\": %.4f}, \"isa\": \"%s\"",
-        model_path, data, pos_err.size(), bad_frames, flagged, ps.median, ps.mean, ps.p90, ps.max,
-        os.median, os.mean, os.p90, os.max, e.isa());
+    std::printf("{\"model\": \"%s\", \"data\": \"%s\", \"skipped\": %zu, \"isa\": \"%s\", ",
+                model_path, data, bad_frames, e.isa());
+    print_summary_json(sum, stdout);
     if (cmp.engine) {
       std::printf(
           ", \"compare\": {\"model\": \"%s\", \"flagged\": %zu, \"position_m\": {\"median\": "
@@ -203,12 +253,11 @@ int cmd_eval(int argc, char** argv) {
     std::printf("}\n");
   } else {
     std::printf("model        %s (%s kernels)\n", model_path, e.isa());
-    std::printf("sequence     %s: %zu frames evaluated, %zu skipped, %zu flagged\n", data,
-                pos_err.size(), bad_frames, flagged);
-    std::printf("position     median %.2f m  mean %.2f m  p90 %.2f m  max %.2f m\n", ps.median,
-                ps.mean, ps.p90, ps.max);
-    std::printf("orientation  median %.2f deg  mean %.2f deg  p90 %.2f deg  max %.2f deg\n",
-                os.median, os.mean, os.p90, os.max);
+    std::printf(
+        "sequence     %s: %zu frames evaluated (from %ld, every %ld), %zu skipped, %zu "
+        "flagged by the model\n",
+        data, samples.size(), start, every, bad_frames, flagged);
+    print_summary(sum, stdout);
     if (cmp.engine) {
       std::printf("compare      %s (%s kernels), %zu flagged\n", compare_path, cmp.engine->isa(),
                   cmp.flagged);

@@ -55,7 +55,8 @@ int cmd_infer(int argc, char** argv) {
   const char* tol_text = args.value("--tolerance", "1e-3");
   const char* model = args.positional();
   const char* frame = args.positional();
-  if (args.error() || !model || !frame || args.leftover()) {
+  if (args.refuse("infer")) return 2;
+  if (!model || !frame) {
     std::fprintf(stderr, "aprt infer: usage: aprt infer MODEL FRAME.raw (see --help)\n");
     return 2;
   }

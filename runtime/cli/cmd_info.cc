@@ -32,9 +32,9 @@ int cmd_info(int argc, char** argv) {
   }
   const bool list_ops = args.flag("--ops");
   const char* path = args.positional();
-  if (!path || args.leftover()) {
-    std::fprintf(stderr, "aprt info: %s\n",
-                 path ? "unexpected argument" : "missing MODEL (usage: aprt info MODEL)");
+  if (args.refuse("info")) return 2;
+  if (!path) {
+    std::fprintf(stderr, "aprt info: missing MODEL (usage: aprt info MODEL [--ops])\n");
     return 2;
   }
   EngineOptions opts;

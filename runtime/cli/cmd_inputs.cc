@@ -62,9 +62,9 @@ int cmd_inputs(int argc, char** argv) {
   const long every = args.integer("--every", 1, 1, 1000000);
   const long limit = args.integer("--limit", 0, 0, 100000000);
   const char* isa = args.value("--isa");
-  if (args.error() || !model_path || !data || !out || args.leftover()) {
-    std::fprintf(stderr, "aprt inputs: %s (see --help)\n",
-                 args.error() ? args.error() : "--model, --data and --out are required");
+  if (args.refuse("inputs")) return 2;
+  if (!model_path || !data || !out) {
+    std::fprintf(stderr, "aprt inputs: --model, --data and --out are required (see --help)\n");
     return 2;
   }
   std::unique_ptr<Engine> engine = open_model("inputs", model_path, 1, isa);

@@ -107,11 +107,7 @@ int cmd_run(int argc, char** argv) {
   const bool check = args.flag("--check");
   const char* timing = args.value("--timing");
   const char* save = args.value("--save-frame");
-  if (args.error() || args.leftover()) {
-    std::fprintf(stderr, "aprt run: bad argument '%s' (see aprt run --help)\n",
-                 args.error() ? args.error() : args.leftover());
-    return 2;
-  }
+  if (args.refuse("run")) return 2;
   const std::string path = config_path ? config_path : data_dir() + "/config/default.yaml";
   auto loaded = load_config(path);
   if (!loaded) {

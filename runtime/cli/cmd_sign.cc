@@ -30,7 +30,8 @@ int cmd_sign(int argc, char** argv) {
   const char* pub_path = args.value("--public-key");
   const char* first = args.positional();
   const char* second = first && !std::strcmp(first, "keygen") ? args.positional() : nullptr;
-  if (args.error() || !first || args.leftover()) {
+  if (args.refuse("sign")) return 2;
+  if (!first) {
     std::fprintf(stderr,
                  "aprt sign: usage: aprt sign keygen PREFIX | MODEL --key KEY | "
                  "--verify MODEL --public-key PUB\n");

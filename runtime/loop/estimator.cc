@@ -11,9 +11,7 @@ Estimator::Estimator(const Config& config, CaptureChannel* const* channels, size
       n_(n),
       bounds_margin_(float(config.sanity.bounds_margin)),
       min_points_(config.source.lidar.min_points),
-      deadline_ns_(int64_t(config.supervisor.inference_deadline_ms * 1e6)),
-      max_jump_m_(config.sanity.max_jump_m),
-      max_speed_mps_(config.sanity.max_speed_mps) {
+      deadline_ns_(int64_t(config.supervisor.inference_deadline_ms * 1e6)) {
   fusion_.max_position_spread_m = config.fusion.max_position_spread_m;
   fusion_.max_orientation_spread_rad = config.fusion.max_orientation_spread_deg * M_PI / 180.0;
   fusion_.min_agreeing = config.fusion.min_agreeing;
@@ -29,6 +27,7 @@ PoseGateParams pose_gate_params(const Config& config) {
   p.gate_m = t.gate_m;
   p.gate_deg = t.gate_deg;
   p.gate_growth_mps = t.gate_growth_mps;
+  p.max_jump_m = config.sanity.max_jump_m;
   p.max_speed_mps = config.sanity.max_speed_mps;
   p.confirm = t.confirm;
   p.lost_after = t.lost_after;
@@ -126,18 +125,6 @@ uint32_t Estimator::check(const PoseRecord& rec, uint32_t flags) noexcept {
   if (rec.inference_end_ns - rec.inference_start_ns > deadline_ns_) {
     flags |= kPoseDeadlineMissed;
     ++deadline_misses_;
-  }
-  if (have_prev_ && max_jump_m_ > 0 && !(flags & kPoseNonFinite)) {
-    double d = 0;
-    for (int k = 0; k < 3; ++k)
-      d += (rec.pose.position[k] - prev_[k]) * (rec.pose.position[k] - prev_[k]);
-    const double dt = double(rec.capture_ns - prev_ns_) * 1e-9;
-    if (std::sqrt(d) > max_jump_m_ + max_speed_mps_ * std::max(0.0, dt)) flags |= kPoseJump;
-  }
-  if (!(flags & (kPoseNonFinite | kPoseOutOfBounds | kPoseJump | kPoseNoQuorum))) {
-    for (int k = 0; k < 3; ++k) prev_[k] = rec.pose.position[k];
-    prev_ns_ = rec.capture_ns;
-    have_prev_ = true;
   }
   // A frame that came late or stale says nothing against the track's motion;
   // everything else the pose itself or the fusion flagged is not used by it.

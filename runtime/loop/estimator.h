@@ -67,12 +67,8 @@ class Estimator {
   float bounds_margin_;
   int min_points_;
   int64_t deadline_ns_;
-  double max_jump_m_, max_speed_mps_;
   FusionParams fusion_;
   PoseGate gate_;
-  bool have_prev_ = false;
-  double prev_[3] = {};
-  int64_t prev_ns_ = 0;
   ScanNote scan_;
   uint64_t sparse_scans_ = 0, no_quorum_ = 0, deadline_misses_ = 0;
 };

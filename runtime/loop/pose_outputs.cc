@@ -1,5 +1,6 @@
 #include "runtime/loop/pose_outputs.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -134,8 +135,16 @@ void PoseOutputs::publish(const PoseRecord& r, int64_t now_ns,
     s.state = uint8_t(r.state);
     s.flags = uint16_t(r.flags & 0xFFFF);
     s.valid = valid;
-    s.sigma_pos_m = sigma_pos_;
-    s.sigma_yaw_deg = sigma_rot_deg_;
+    // The pose's own confidence (FORMAT.md 1.3) where the model has it: the
+    // horizontal 1-sigma (the larger axis, after the map offset: the
+    // covariance's x-y block) and the yaw 1-sigma; else the constant.
+    if (r.pose.has_sigma) {
+      s.sigma_pos_m = std::sqrt(std::max(last_.covariance[0], last_.covariance[7]));
+      s.sigma_yaw_deg = std::sqrt(last_.covariance[35]) * 180.0 / M_PI;
+    } else {
+      s.sigma_pos_m = sigma_pos_;
+      s.sigma_yaw_deg = sigma_rot_deg_;
+    }
     s.x = last_.position.x();
     s.y = last_.position.y();
     s.z = last_.position.z();

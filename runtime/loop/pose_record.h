@@ -4,15 +4,9 @@
 #include <cstdint>
 
 #include "runtime/engine/pose_decode.h"
+#include "runtime/pose/pose_flags.h"
 
 namespace aprt {
-
-// Flags the loop adds to the pose's own (runtime/engine/pose_decode.h, bits 0..3).
-inline constexpr uint32_t kPoseStaleFrame = 1u << 8;      // frame older than frame_timeout
-inline constexpr uint32_t kPoseDeadlineMissed = 1u << 9;  // inference over its deadline
-inline constexpr uint32_t kPoseJump = 1u << 10;           // implausible jump from the last pose
-inline constexpr uint32_t kPoseNoQuorum = 1u << 11;       // cameras disagree: no majority (fusion)
-inline constexpr uint32_t kPoseSparseScan = 1u << 12;     // LiDAR: too few points (padded or empty)
 
 enum class RunState : uint8_t { kStarting, kRunning, kDegraded, kFault, kStopping };
 const char* run_state_name(RunState s);

@@ -89,12 +89,38 @@ bool PoseGate::consistent(const Track& k, double t, double x, double y, double y
 void PoseGate::reset() noexcept {
   track_.clear();
   candidate_.clear();
+  have_prev_ = false;
+}
+
+// The jump from the reference pose: with the gate on, the last pose that went
+// out valid (so a run of wrong estimates never becomes the reference); with
+// it off, the last plausible one (not non-finite, out of bounds, a jump, or a
+// fusion without quorum).
+uint32_t PoseGate::jump(const PoseEstimate& e, double t, uint32_t flags) noexcept {
+  if (!have_prev_ || p_.max_jump_m <= 0 || (flags & kPoseNonFinite)) return 0;
+  double d = 0;
+  for (int k = 0; k < 3; ++k) d += (e.position[k] - prev_[k]) * (e.position[k] - prev_[k]);
+  const double dt = t - prev_t_;
+  return std::sqrt(d) > p_.max_jump_m + p_.max_speed_mps * (dt > 0 ? dt : 0) ? kPoseJump : 0;
+}
+
+void PoseGate::remember(const PoseEstimate& e, double t) noexcept {
+  for (int k = 0; k < 3; ++k) prev_[k] = e.position[k];
+  prev_t_ = t;
+  have_prev_ = true;
 }
 
 uint32_t PoseGate::check(const PoseEstimate& e, double t, uint32_t flags) noexcept {
-  if (!p_.enabled) return 0;
-  uint32_t out = 0;
-  bool usable = flags == 0;
+  const uint32_t out = gate(e, t, flags);
+  constexpr uint32_t kImplausible = kPoseNonFinite | kPoseOutOfBounds | kPoseNoQuorum | kPoseJump;
+  if (p_.enabled ? (flags | out) == 0 : !((flags | out) & kImplausible)) remember(e, t);
+  return out;
+}
+
+uint32_t PoseGate::gate(const PoseEstimate& e, double t, uint32_t flags) noexcept {
+  uint32_t out = jump(e, t, flags);
+  if (!p_.enabled) return out;
+  bool usable = (flags | out) == 0;
   if (e.has_sigma) {
     const double r = kChi2Sqrt95 * std::fmax(e.sigma_position_m[0], e.sigma_position_m[1]);
     const double yaw_interval = kZ95 * e.sigma_rotation_rad[2] * 180.0 / kPi;

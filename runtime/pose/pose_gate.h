@@ -1,5 +1,6 @@
-// Whether an estimate may go out as valid: the model's own confidence for the
-// frame, and the estimate's agreement with the vehicle's recent motion.
+// Whether an estimate may go out as valid: no implausible jump from the last
+// plausible pose, the model's own confidence for the frame, and the
+// estimate's agreement with the vehicle's recent motion.
 //
 // An absolute pose regressor is right most of the time and, now and then,
 // confidently on the wrong street (a view down one street looks like a view
@@ -23,21 +24,19 @@
 #include <cstdint>
 
 #include "runtime/engine/pose_decode.h"
+#include "runtime/pose/pose_flags.h"
 
 namespace aprt {
 
-inline constexpr uint32_t kPoseUncertain = 1u << 13;     // the model's own sigma is too large
-inline constexpr uint32_t kPoseInconsistent = 1u << 14;  // disagrees with the vehicle's motion
-inline constexpr uint32_t kPoseUnconfirmed = 1u << 15;   // no confirmed track yet
-
 struct PoseGateParams {
-  bool enabled = true;
+  double max_jump_m = 30.0;            // between plausible poses (0: off) ...
+  double max_speed_mps = 60.0;         // ... plus this much per second between them
+  bool enabled = true;                 // the confidence and track tests below
   double max_position_radius_m = 8.0;  // 95 % horizontal radius the model may state
   double max_yaw_interval_deg = 10.0;  // 95 % yaw half-interval
   double gate_m = 6.0;                 // distance from the track's prediction
   double gate_deg = 10.0;              // yaw difference from the track's prediction
   double gate_growth_mps = 2.0;        // the gate widens with the time since the last accepted
-  double max_speed_mps = 60.0;         // a track's velocity is capped at this
   int confirm = 5;                     // consistent estimates in a row that start a track
   int lost_after = 25;                 // rejections in a row that end it
 };
@@ -49,6 +48,10 @@ class PoseGate {
   // The gate's flags for an estimate at time t_s (seconds, monotonic) whose
   // own flags are `flags` (an estimate already flagged is not used). @rt.
   uint32_t check(const PoseEstimate& e, double t_s, uint32_t flags) noexcept;
+  // flags | check(): every flag the pose goes out with.
+  uint32_t apply(const PoseEstimate& e, double t_s, uint32_t flags) noexcept {
+    return flags | check(e, t_s, flags);
+  }
   void reset() noexcept;
 
   bool tracking() const { return track_.count >= p_.confirm; }
@@ -74,7 +77,13 @@ class PoseGate {
  private:
   bool consistent(const Track& k, double t, double x, double y, double yaw) const noexcept;
 
+  uint32_t gate(const PoseEstimate& e, double t_s, uint32_t flags) noexcept;
+  uint32_t jump(const PoseEstimate& e, double t_s, uint32_t flags) noexcept;
+  void remember(const PoseEstimate& e, double t_s) noexcept;
+
   PoseGateParams p_;
+  bool have_prev_ = false;  // the last plausible pose, for the jump test
+  double prev_[3] = {}, prev_t_ = 0;
   Track track_;      // confirmed when count >= confirm
   Track candidate_;  // estimates the track refused, agreeing among themselves
 };

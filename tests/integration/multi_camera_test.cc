@@ -48,6 +48,7 @@ Config base(const std::string& root) {
   c.output.summary = false;
   c.sanity.max_jump_m = 0;
   c.sanity.bounds_margin = 1;
+  c.sanity.track.enabled = false;  // fusion is under test, not the validity gate
   c.supervisor.inference_deadline_ms = 5000;
   c.supervisor.frame_timeout_ms = 5000;
   c.supervisor.systemd = false;

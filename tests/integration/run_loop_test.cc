@@ -211,10 +211,12 @@ std::string joined(const std::vector<std::string>& v) {
   return s;
 }
 
-// Position of `what` in the trace at or after `from`, or -1.
+// Position of the first change at or after `from` that starts with `what`,
+// or -1 ("RUNNING: ok" also matches "RUNNING: ok; pose withheld: ...": a
+// healthy loop whose last pose the validity gate held back).
 int find_in(const std::vector<std::string>& trace, const std::string& what, int from = 0) {
   for (int i = std::max(from, 0); i < int(trace.size()); ++i) {
-    if (trace[size_t(i)] == what) return i;
+    if (trace[size_t(i)].rfind(what, 0) == 0) return i;
   }
   return -1;
 }

@@ -135,6 +135,9 @@ std::vector<uint8_t> ModelBuilder::build() const {
   meta_record(meta, 21, 2, pose_max.data(), uint32_t(pose_max.size() * 4));
   if (!bev.empty()) meta_record(meta, 50, 2, bev.data(), uint32_t(bev.size() * 4));
   if (!points.empty()) meta_record(meta, 51, 2, points.data(), uint32_t(points.size() * 4));
+  if (!uncertainty.empty()) {
+    meta_record(meta, 43, 2, uncertainty.data(), uint32_t(uncertainty.size() * 4));
+  }
   meta_record(meta, 31, 1, &d_model, 4);
   meta_record(meta, 32, 1, &nheads, 4);
   meta_record(meta, 33, 1, &enc_layers, 4);

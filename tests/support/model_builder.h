@@ -46,6 +46,7 @@ class ModelBuilder {
   uint32_t modality = 1;
   std::vector<float> bev;     // META 'bev' (cell, x_min, y_min, threshold, clip) when not empty
   std::vector<float> points;  // META 'points' (crop radius, coordinate scale) when not empty
+  std::vector<float> uncertainty;  // META 'uncertainty' (position, rotation scales) when not empty
   std::vector<float> pose_min{0, 0, 0}, pose_max{10, 20, 5};
   uint32_t d_model = 16, nheads = 2, enc_layers = 1, dec_layers = 1;
   uint16_t version_major = format::kVersionMajor;

@@ -97,6 +97,48 @@ class Synth(unittest.TestCase):
         self.assertLessEqual(len(pts), 4 * 90)
         self.assertLessEqual(np.linalg.norm(pts[:, :3], axis=1).max(), 40.0 + 1e-3)
 
+    def test_view_jitter_moves_every_frame_within_its_bounds(self):
+        synth(self.path("plain"), "--split", "test", "--route-seed", "9", "--frames", "40")
+        synth(self.path("jit"), "--split", "test", "--route-seed", "9", "--frames", "40",
+              "--view-jitter", "1.5,0.3,3,10")
+        a, b = read_poses(self.path("plain")), read_poses(self.path("jit"))
+        dxy = np.array([np.hypot(*(pb[:2] - pa[:2])) for (_, pa, _), (_, pb, _) in zip(a, b)])
+        dz = np.array([pb[2] - pa[2] for (_, pa, _), (_, pb, _) in zip(a, b)])
+        dyaw = np.degrees([abs(2 * np.arctan2(qb[3], qb[0]) - 2 * np.arctan2(qa[3], qa[0]))
+                           for (_, _, qa), (_, _, qb) in zip(a, b)])
+        self.assertGreater(dxy.mean(), 0.3)
+        self.assertLessEqual(dxy.max(), 1.5 + 1.2 * np.radians(10) + 0.05)  # lateral + yaw lever
+        self.assertLessEqual(np.abs(dz).max(), 0.3 + 1e-3)
+        self.assertLessEqual(dyaw.max(), 10.0 + 3.5)  # yaw, plus the pitch's share of it
+        meta = json.loads(read(self.path("jit/dataset.json")))
+        self.assertEqual(meta["view_jitter"], {"lateral_m": 1.5, "height_m": 0.3, "pitch_deg": 3.0,
+                                               "yaw_deg": 10.0})
+        for args, message in ((["--view-jitter", "3,0,0,0"], "out of range"),
+                              (["--view-jitter", "1,2,3"], "4 comma-separated numbers")):
+            r = synth(self.path("bad"), *args, check=False)
+            self.assertEqual(r.returncode, 2, args)
+            self.assertIn(message, r.stderr)
+
+    def test_dataset_json_regenerates_the_drive(self):
+        synth(self.path("a"), "--split", "test", "--route-seed", "4", "--frames", "5",
+              "--lighting", "noon", "--view-jitter", "0.5,0.1,1,2", "--max-length", "80")
+        meta = json.loads(read(self.path("a/dataset.json")))
+        self.assertEqual((meta["frames_limit"], meta["max_length_m"], meta["spacing_m"]),
+                         (5, 80.0, 1.0))
+        r = subprocess.run([SYNTH, "--out", self.path("b")] + meta["command"].split()[1:],
+                           capture_output=True, text=True)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(read(self.path("a/poses.txt")), read(self.path("b/poses.txt")))
+        np.testing.assert_array_equal(load_image(self.path("a"), "images/000004.png"),
+                                      load_image(self.path("b"), "images/000004.png"))
+
+    def test_help_lists_the_options_and_the_data_split(self):
+        r = subprocess.run([SYNTH, "--help"], capture_output=True, text=True)
+        self.assertEqual(r.returncode, 0)
+        for word in ("--view-jitter", "--lighting", "--camera-mount", "training", "validation",
+                     "test", "[1.0]"):
+            self.assertIn(word, r.stdout)
+
     def test_bad_arguments_are_refused(self):
         for args, message in ((["--lighting", "sunset"], "unknown lighting 'sunset'"),
                               (["--frames", "1O"], "--frames '1O' is not a valid number"),

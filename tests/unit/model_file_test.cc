@@ -172,6 +172,19 @@ TEST(ModelFile, RefusesInconsistentBevMetadata) {
   expect_error(count, Errc::kBadMetadata, "META key 50 has 12 bytes");
 }
 
+// model_bin 1.3: confidence outputs (13 values) and their calibration go
+// together; the scales are positive and bounded.
+TEST(ModelFile, ConfidenceOutputsNeedTheirCalibration) {
+  auto plain = test::make_small_model([](ModelBuilder& m) { m.uncertainty = {1.5f, 0.7f}; });
+  expect_error(plain, Errc::kBadMetadata, "'uncertainty' without the confidence outputs");
+  auto zero = test::make_small_model([](ModelBuilder& m) { m.uncertainty = {0.0f, 0.7f}; });
+  expect_error(zero, Errc::kBadMetadata, "uncertainty calibration scales 0, 0.7");
+  auto nan = test::make_small_model([](ModelBuilder& m) { m.uncertainty = {NAN, 0.7f}; });
+  expect_error(nan, Errc::kBadMetadata, "uncertainty");
+  auto count = test::make_small_model([](ModelBuilder& m) { m.uncertainty = {1.0f}; });
+  expect_error(count, Errc::kBadMetadata, "META key 43 has 4 bytes");
+}
+
 TEST(ModelFile, RefusesAbsurdShapes) {
   auto huge = test::make_small_model([](ModelBuilder& m) {
     m.set_dims(m.tensor_index("dw.out"), {1, 1 << 21, 4, 8});

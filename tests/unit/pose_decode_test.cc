@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -52,6 +53,36 @@ TEST(PoseDecode, FlagsWhatCannotBeTrusted) {
   char text[64];
   EXPECT_STREQ(pose_flags_text(kPoseNonFinite | kPoseOutOfBounds, text, sizeof text),
                "non-finite,out-of-bounds");
+}
+
+// Outputs 7..12 of a model with confidence (FORMAT.md 1.3): sigma = scale *
+// sqrt(2) * exp(s), times the axis's extent for the position; non-finite
+// confidence outputs flag the pose.
+TEST(PoseDecode, ConfidenceOutputsBecomeStandardDeviations) {
+  ModelMeta m = meta();
+  m.has_uncertainty = true;
+  m.uncertainty_scale[0] = 2.0f;
+  m.uncertainty_scale[1] = 0.5f;
+  const float raw[13] = {
+      0.5f, 0.5f,          0.5f, 1, 0, 0, 0, std::log(0.01f), 0.0f, -30.0f, std::log(0.02f),
+      0.0f, std::log(0.1f)};
+  const PoseEstimate p = decode_pose(raw, m);
+  ASSERT_TRUE(p.has_sigma);
+  EXPECT_TRUE(p.valid());
+  EXPECT_NEAR(p.sigma_position_m[0], 2.0 * std::sqrt(2.0) * 0.01 * 400.0, 1e-4);
+  EXPECT_NEAR(p.sigma_position_m[1], 2.0 * std::sqrt(2.0) * 1.0 * 200.0, 1e-4);
+  EXPECT_NEAR(p.sigma_position_m[2], 2.0 * std::sqrt(2.0) * std::exp(-14.0) * 10.0,
+              1e-9);  // clamped
+  EXPECT_NEAR(p.sigma_rotation_rad[0], 0.5 * std::sqrt(2.0) * 0.02, 1e-6);
+  EXPECT_NEAR(p.sigma_rotation_rad[2], 0.5 * std::sqrt(2.0) * 0.1, 1e-6);
+  float bad[13];
+  std::copy(raw, raw + 13, bad);
+  bad[11] = std::numeric_limits<float>::quiet_NaN();
+  const PoseEstimate q = decode_pose(bad, m);
+  EXPECT_FALSE(q.has_sigma);
+  EXPECT_TRUE(q.flags & kPoseNoConfidence);
+  // Without the calibration (a 7-output model) nothing past raw[6] is read.
+  EXPECT_FALSE(decode_pose(raw, meta()).has_sigma);
 }
 
 }  // namespace

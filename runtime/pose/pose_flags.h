@@ -1,0 +1,22 @@
+// The flags a pose can carry beyond the network output's own
+// (runtime/engine/pose_decode.h, bits 0..7): what the loop, the fusion and the
+// validity gate found. A pose with any flag is not published as valid.
+#pragma once
+
+#include <cstdint>
+
+namespace aprt {
+
+// Flags the loop adds to the pose's own (runtime/engine/pose_decode.h, bits 0..3).
+inline constexpr uint32_t kPoseStaleFrame = 1u << 8;      // frame older than frame_timeout
+inline constexpr uint32_t kPoseDeadlineMissed = 1u << 9;  // inference over its deadline
+inline constexpr uint32_t kPoseJump = 1u << 10;           // implausible jump from the last pose
+inline constexpr uint32_t kPoseNoQuorum = 1u << 11;       // cameras disagree: no majority (fusion)
+inline constexpr uint32_t kPoseSparseScan = 1u << 12;     // LiDAR: too few points (padded or empty)
+// The validity gate's (runtime/pose/pose_gate.h): the pose is withheld, the
+// system is fine.
+inline constexpr uint32_t kPoseUncertain = 1u << 13;     // the model's own sigma is too large
+inline constexpr uint32_t kPoseInconsistent = 1u << 14;  // disagrees with the vehicle's motion
+inline constexpr uint32_t kPoseUnconfirmed = 1u << 15;   // no confirmed track yet
+
+}  // namespace aprt
