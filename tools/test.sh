@@ -3,7 +3,7 @@
 #   tools/test.sh            the default run: format and layer checks, then every
 #                            test except the slow suites, on the ASan+UBSan build
 #   tools/test.sh --slow     full-size golden models (224 and 128) on the release build
-#   tools/test.sh --fuzz N   the model-file fuzzer for N seconds, the PointCloud2 one N/2 (clang, libFuzzer)
+#   tools/test.sh --fuzz N   every libFuzzer target (tools/fuzz.sh) in N seconds in all (clang)
 #   tools/test.sh --tsan     the threaded engine and the supervised loop under ThreadSanitizer
 #   tools/test.sh --aarch64  cross build for aarch64; unit, kernel and tiny golden
 #                            tests under qemu-aarch64 as Cortex-A72 (no dotprod)
@@ -32,18 +32,13 @@ case "${1:-}" in
     ctest --preset release -L slow --timeout 1800
     ;;
   --fuzz)
+    # Every libFuzzer target (tools/fuzz.sh), SECONDS split among them:
+    # the model file a third, the other nine the rest.
     seconds="${2:-60}"
-    cmake --preset fuzz >/dev/null
-    cmake --build --preset fuzz -j "$jobs" --target model_file_fuzz write_seed pointcloud2_fuzz
-    corpus=build/fuzz/corpus
-    mkdir -p "$corpus"
-    build/fuzz/bin/write_seed "$corpus"
-    build/fuzz/bin/model_file_fuzz -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
-      -print_final_stats=1 "$corpus"
-    # The PointCloud2 decoder: half the time again (its inputs are small).
-    mkdir -p build/fuzz/corpus_pc2
-    build/fuzz/bin/pointcloud2_fuzz -max_total_time="$((seconds / 2))" -timeout=10 \
-      -rss_limit_mb=4096 -print_final_stats=1 build/fuzz/corpus_pc2
+    tools/fuzz.sh "$((seconds / 3 > 1 ? seconds / 3 : 1))" model_file_fuzz
+    rest=$(( (seconds * 2 / 3) / 9 ))
+    tools/fuzz.sh "$((rest > 1 ? rest : 1))" pointcloud2_fuzz pcd_fuzz kitti_fuzz image_fuzz \
+      pose_list_fuzz frame_sidecar_fuzz candump_log_fuzz config_fuzz dbc_fuzz
     ;;
   --tsan)
     cmake --preset tsan >/dev/null

@@ -16,6 +16,7 @@
 #include <jpeglib.h>
 
 #include "runtime/base/check.h"
+#include "runtime/base/file_io.h"
 
 namespace aprt {
 
@@ -115,27 +116,14 @@ void* ImageDecoder::arena_alloc(size_t n) {
   return p;
 }
 
+// A regular file of at most file_capacity_ bytes (a FIFO or a device at the
+// path is refused, never read: runtime/base/file_io.h).
 Expected<size_t> ImageDecoder::read_file(const char* path) {
-  const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
-  APRT_ENSURE(fd >= 0, Errc::kIo, "image: cannot open '%s': %s", path, std::strerror(errno));
-  size_t got = 0;
-  for (;;) {
-    if (got == file_capacity_) {
-      ::close(fd);
-      return Error(Errc::kTooLarge, "image: '%s' is larger than %zu bytes", path, file_capacity_);
-    }
-    const ssize_t r = ::read(fd, file_ + got, file_capacity_ - got);
-    if (r < 0 && errno == EINTR) continue;
-    if (r < 0) {
-      const int e = errno;
-      ::close(fd);
-      return Error(Errc::kIo, "image: reading '%s': %s", path, std::strerror(e));
-    }
-    if (r == 0) break;
-    got += size_t(r);
-  }
-  ::close(fd);
-  return got;
+  auto f = open_input_file(path, file_capacity_, "image");
+  if (!f) return f.error();
+  const long got = f->read(file_, size_t(f->size()));
+  APRT_ENSURE(got >= 0, Errc::kIo, "image: reading '%s': %s", path, std::strerror(errno));
+  return size_t(got);
 }
 
 Expected<DecodedImage> ImageDecoder::decode(const char* path, uint8_t* out, size_t capacity) {

@@ -85,12 +85,12 @@ Expected<KernelTable> pick_kernels(const char* isa) {
   if (std::strcmp(isa, "ref") == 0) return KernelTable{};
   for (const IsaParts& p : parts) {
     if (std::strcmp(isa, p.isa) != 0) continue;
-    APRT_ENSURE(p.f32_runs, Errc::kUnsupported,
+    APRT_ENSURE(p.f32_runs, Errc::kIsaUnavailable,
                 "engine: this CPU cannot run the '%s' kernels (forced by APRT_ISA or --isa)", isa);
     return table_of(p);
   }
   for (const char* known : {"avx512", "avx2", "neon"}) {
-    APRT_ENSURE(std::strcmp(isa, known) != 0, Errc::kUnsupported,
+    APRT_ENSURE(std::strcmp(isa, known) != 0, Errc::kIsaUnavailable,
                 "engine: ISA '%s' is not compiled into this build", isa);
   }
   return Error(Errc::kInvalidArgument, "engine: unknown ISA '%s' (auto, ref, avx512, avx2, neon)",

@@ -29,6 +29,7 @@ const char* errc_name(Errc code) noexcept {
     case Errc::kUnsupported: return "unsupported";
     case Errc::kNotReady: return "not_ready";
     case Errc::kNotFound: return "not_found";
+    case Errc::kIsaUnavailable: return "isa_unavailable";
   }
   return "unknown";
 }

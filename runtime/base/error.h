@@ -34,6 +34,9 @@ enum class Errc : uint16_t {
   kUnsupported,
   kNotReady,
   kNotFound,  // a device or interface that does not exist (yet)
+  // Kernels for an ISA this CPU lacks or this build does not contain (--isa,
+  // APRT_ISA): the one refusal a test may skip on (every other is a failure).
+  kIsaUnavailable,
 };
 
 const char* errc_name(Errc code) noexcept;

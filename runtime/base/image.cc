@@ -32,4 +32,13 @@ size_t frame_bytes(PixelFormat f, int width, int height) {
   return min_stride(f, width) * size_t(height);
 }
 
+size_t image_span(PixelFormat f, int width, int height, size_t stride) {
+  if (width <= 0 || height <= 0) return 0;
+  if (f == PixelFormat::kNv12) {
+    const size_t uv_rows = size_t(height + 1) / 2;
+    return stride * (size_t(height) + uv_rows - 1) + size_t((width + 1) / 2) * 2;
+  }
+  return stride * size_t(height - 1) + min_stride(f, width);
+}
+
 }  // namespace aprt

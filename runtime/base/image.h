@@ -21,6 +21,10 @@ const char* pixel_format_name(PixelFormat f);
 size_t min_stride(PixelFormat f, int width);
 // Bytes of a tightly packed frame.
 size_t frame_bytes(PixelFormat f, int width, int height);
+// Bytes from a frame's first to one past its last byte read, rows `stride`
+// apart (the NV12 UV plane `height` rows after the Y plane, same stride): a
+// buffer of fewer bytes, or a stride below min_stride(), is not this frame.
+size_t image_span(PixelFormat f, int width, int height, size_t stride);
 
 struct ImageView {
   const uint8_t* data;

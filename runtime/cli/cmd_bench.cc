@@ -102,18 +102,20 @@ int cmd_bench(int argc, char** argv) {
   const uint64_t allocs = allocations.count();
   std::vector<double> sorted = ms;
   std::sort(sorted.begin(), sorted.end());
-  const double med = percentile(sorted, 0.5), p99 = percentile(sorted, 0.99);
+  const double med = percentile(sorted, 0.5), p99 = percentile(sorted, 0.99),
+               p999 = percentile(sorted, 0.999);
   const MemoryReport& r = e.memory();
   const double gflops = double(e.total_flops()) / 1e9;
   if (json) {
     std::printf(
         "{\"model\": \"%s\", \"runs\": %ld, \"warmup\": %ld, \"min_ms\": %.4f, \"median_ms\": "
-        "%.4f, \"p99_ms\": %.4f, \"max_ms\": %.4f, \"allocations_during_runs\": %llu, "
+        "%.4f, \"p99_ms\": %.4f, \"p999_ms\": %.4f, \"max_ms\": %.4f, "
+        "\"allocations_during_runs\": %llu, "
         "\"allocations_cover_malloc\": %s, \"arena_bytes\": %zu, \"weight_bytes\": %zu, "
         "\"scratch_bytes\": %zu, \"total_bytes\": %zu, \"memory_locked\": %s, "
         "\"peak_rss_kb\": %ld, \"gflop_per_frame\": %.4f, \"gflops\": %.3f, \"threads\": %d, "
         "\"isa\": \"%s\", \"ms\": [",
-        path, runs, warmup, sorted.front(), med, p99, sorted.back(),
+        path, runs, warmup, sorted.front(), med, p99, p999, sorted.back(),
         static_cast<unsigned long long>(allocs),
         allocation_counter_covers_malloc() ? "true" : "false", r.arena_bytes, r.weight_bytes,
         r.scratch_bytes, r.total_bytes, r.locked ? "true" : "false", peak_rss_kb(), gflops,
@@ -124,8 +126,9 @@ int cmd_bench(int argc, char** argv) {
     std::printf("model        %s\n", path);
     std::printf("runs         %ld after %ld warm-up, %d thread%s, %s kernels\n", runs, warmup,
                 e.threads(), e.threads() > 1 ? "s" : "", e.isa());
-    std::printf("latency      min %.3f  median %.3f  p99 %.3f  max %.3f ms\n", sorted.front(), med,
-                p99, sorted.back());
+    std::printf("latency      min %.3f  median %.3f  p99 %.3f  p99.9 %.3f  max %.3f ms\n",
+                sorted.front(), med, p99, p999, sorted.back());
+    std::printf("tail         p99 / median %.2f, p99.9 / median %.2f\n", p99 / med, p999 / med);
     std::printf("throughput   %.2f GFLOP/s (%.3f GFLOP per frame)\n", gflops / (med / 1e3), gflops);
     std::printf("allocations  %llu during the timed runs%s\n",
                 static_cast<unsigned long long>(allocs),

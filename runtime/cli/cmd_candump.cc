@@ -12,12 +12,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
-#include <fstream>
 #include <string>
 
+#include "drivers/output/can/candump_log.h"
 #include "drivers/output/can/dbc.h"
 #include "drivers/output/can/pose_can_codec.h"
 #include "drivers/output/can/socketcan.h"
+#include "runtime/base/file_io.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
 #include "runtime/config/config.h"
@@ -28,65 +29,6 @@ namespace {
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) {
   g_stop = 1;
-}
-
-int hex_nibble(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  return -1;
-}
-
-// One line of `candump -L` ("(1700000000.123456) can0 301#0011..", FD "310##<flags><data>")
-// or of candump's default output ("  can0  301   [8]  00 11 ..").
-// Returns false for a line that is not a frame.
-bool parse_log_line(const std::string& line, can::Frame* f, double* t) {
-  *f = can::Frame{};
-  *t = 0;
-  const size_t hash = line.find('#');
-  if (hash != std::string::npos) {
-    size_t p = 0;
-    if (line[0] == '(') {
-      *t = std::strtod(line.c_str() + 1, nullptr);
-      p = line.find(')') + 1;
-    }
-    size_t id_end = hash, id_start = line.rfind(' ', hash);
-    id_start = id_start == std::string::npos || id_start < p ? p : id_start + 1;
-    f->id = uint32_t(std::strtoul(line.substr(id_start, id_end - id_start).c_str(), nullptr, 16));
-    size_t d = hash + 1;
-    if (d < line.size() && line[d] == '#') {
-      f->fd = true;
-      d += 2;  // "##" and the flags nibble
-    }
-    int n = 0;
-    while (d + 1 < line.size() && n < 64) {
-      const int hi = hex_nibble(line[d]), lo = hex_nibble(line[d + 1]);
-      if (hi < 0 || lo < 0) break;
-      f->data[n++] = uint8_t(hi * 16 + lo);
-      d += 2;
-    }
-    f->len = uint8_t(n);
-    return true;
-  }
-  const size_t lb = line.find('['), rb = line.find(']');
-  if (lb == std::string::npos || rb == std::string::npos || rb < lb) return false;
-  char ifname[32];
-  unsigned id = 0;
-  if (std::sscanf(line.c_str(), " %31s %x", ifname, &id) != 2) return false;
-  f->id = id;
-  const int len = std::atoi(line.c_str() + lb + 1);
-  f->fd = len > 8;
-  const char* p = line.c_str() + rb + 1;
-  int n = 0;
-  while (*p && n < len && n < 64) {
-    while (*p == ' ') ++p;
-    const int hi = hex_nibble(p[0]), lo = p[0] ? hex_nibble(p[1]) : -1;
-    if (hi < 0 || lo < 0) break;
-    f->data[n++] = uint8_t(hi * 16 + lo);
-    p += 2;
-  }
-  f->len = uint8_t(n);
-  return true;
 }
 
 struct Printer {
@@ -189,7 +131,8 @@ int cmd_candump(int argc, char** argv) {
         "  --timeout S     stop after S seconds without a frame (interface; default: never)\n"
         "  --raw           print every frame's signals too\n"
         "  --quiet         the summary only\n"
-        "  --strict        exit 1 if any CRC, counter or grouping error was seen\n"
+        "  --strict        exit 1 if any CRC, counter or grouping error was seen, a\n"
+        "                  log line was no frame, or no frame came at all\n"
         "  --tolerate-loss with --strict: lost frames (a skipped counter, an incomplete\n"
         "                  estimate) are what E2E detects on a bus outage, not a fault;\n"
         "                  only CRC errors, repeated counters and DBC disagreements fail\n",
@@ -264,21 +207,48 @@ int cmd_candump(int argc, char** argv) {
       std::printf("%.6f  %03X %s\n", t, unsigned(f.id), can::event_name(e));
     }
   };
+  uint64_t malformed = 0;
   if (log) {
-    std::ifstream in(log);
+    // Streamed in blocks: a log of hours is hundreds of MB. Bounded I/O (a
+    // FIFO or a device at the path is refused), every line parsed whole.
+    auto in = open_input_file(log, uint64_t(1) << 40, "candump log");
     if (!in) {
-      std::fprintf(stderr, "aprt candump: cannot open '%s'\n", log);
+      std::fprintf(stderr, "aprt candump: %s\n", in.error().message());
       return 2;
     }
-    std::string line;
-    while (std::getline(in, line)) {
+    std::string pending;
+    char block[1 << 16];
+    uint64_t lineno = 0;
+    bool done = false;
+    auto line = [&](std::string_view text) {
+      ++lineno;
       can::Frame f;
-      double t;
-      if (!parse_log_line(line, &f, &t)) continue;
-      // candump -L marks error frames with the CAN_ERR_FLAG bit in the id.
+      double t = 0;
+      auto r = can::parse_candump_line(text, &f, &t);
+      if (!r) {
+        if (++malformed <= 5)
+          std::fprintf(stderr, "%s:%llu: %s\n", log, static_cast<unsigned long long>(lineno),
+                       r.error().message());
+        return;
+      }
+      if (r.value() != can::LogLine::kFrame) return;
       feed(f, t);
-      if (count && decoder.estimates >= uint64_t(count)) break;
+      if (count && decoder.estimates >= uint64_t(count)) done = true;
+    };
+    for (long n; !done && (n = in->read(block, sizeof block)) > 0;) {
+      pending.append(block, size_t(n));
+      size_t start = 0;
+      for (size_t nl; !done && (nl = pending.find('\n', start)) != std::string::npos;
+           start = nl + 1) {
+        line(std::string_view(pending).substr(start, nl - start));
+      }
+      pending.erase(0, start);
+      if (pending.size() > 4096) {  // no newline for 4 KiB: not a candump log
+        line(std::string_view(pending).substr(0, 1024));
+        pending.clear();
+      }
     }
+    if (!done && !pending.empty()) line(pending);
   } else {
     auto sock = can::SocketCan::open(interface, false, true);
     if (!sock) {
@@ -312,15 +282,21 @@ int cmd_candump(int argc, char** argv) {
     }
   }
   std::fflush(stdout);
+  if (malformed > 5)
+    std::fprintf(stderr, "%s: %llu more malformed lines\n", log,
+                 static_cast<unsigned long long>(malformed - 5));
+  if (frames == 0)
+    std::fprintf(stderr, "aprt candump: no CAN frames in %s\n", log ? log : interface);
   const bool lost = decoder.skipped || decoder.incomplete;
-  const bool bad =
-      decoder.crc_errors || decoder.repeated || printer.disagreements || (lost && !tolerate_loss);
+  // --strict: a log without a frame, or with a line that is none, fails too.
+  const bool bad = decoder.crc_errors || decoder.repeated || printer.disagreements ||
+                   (lost && !tolerate_loss) || malformed || frames == 0;
   std::printf("summary: %" PRIu64 " frames, %" PRIu64 " estimates; CRC errors %" PRIu64
               ", repeated counter %" PRIu64 ", skipped counter %" PRIu64
               ", incomplete estimates %" PRIu64 ", error frames %" PRIu64 ", other ids %" PRIu64
-              "%s\n",
+              ", malformed lines %" PRIu64 "%s\n",
               frames, decoder.estimates, decoder.crc_errors, decoder.repeated, decoder.skipped,
-              decoder.incomplete, error_frames, other,
+              decoder.incomplete, error_frames, other, malformed,
               printer.disagreements ? "; DBC/codec DISAGREEMENTS" : "");
   return strict && bad ? 1 : 0;
 }

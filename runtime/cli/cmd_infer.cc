@@ -10,13 +10,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <memory>
-#include <sstream>
 #include <string>
-#include <vector>
 
-#include "kernels/preprocess/preprocess_image.h"
+#include "drivers/codec/frame_sidecar.h"
+#include "runtime/base/file_io.h"
+#include "runtime/base/text_lines.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
 #include "runtime/cli/open_model.h"
@@ -25,20 +24,6 @@
 #include "runtime/engine/pose_decode.h"
 
 namespace aprt::cli {
-namespace {
-
-bool parse_format(const std::string& s, PixelFormat* f) {
-  for (PixelFormat p : {PixelFormat::kRgb24, PixelFormat::kBgr24, PixelFormat::kYuyv,
-                        PixelFormat::kUyvy, PixelFormat::kNv12, PixelFormat::kGray8}) {
-    if (s == pixel_format_name(p)) {
-      *f = p;
-      return true;
-    }
-  }
-  return false;
-}
-
-}  // namespace
 
 int cmd_infer(int argc, char** argv) {
   Args args(argc, argv);
@@ -60,43 +45,32 @@ int cmd_infer(int argc, char** argv) {
     std::fprintf(stderr, "aprt infer: usage: aprt infer MODEL FRAME.raw (see --help)\n");
     return 2;
   }
-  const double tol = std::atof(tol_text);
-  std::ifstream meta(std::string(frame) + ".txt");
-  if (!meta) {
-    std::fprintf(stderr, "aprt infer: cannot read %s.txt (written beside the frame)\n", frame);
+  double tol = 0;
+  if (!parse_finite(tol_text, &tol) || tol < 0) {
+    std::fprintf(stderr, "aprt infer: --tolerance: expected a number >= 0, got '%s'\n", tol_text);
     return 2;
   }
-  std::string line, format_name;
-  int width = 0, height = 0;
-  size_t stride = 0, bytes = 0;
-  bool have_pose = false;
-  double saved[7] = {};
-  while (std::getline(meta, line)) {
-    std::istringstream in(line);
-    std::string key;
-    in >> key;
-    if (key == "format") in >> format_name;
-    if (key == "width") in >> width;
-    if (key == "height") in >> height;
-    if (key == "stride") in >> stride;
-    if (key == "bytes") in >> bytes;
-    if (key == "pose") {
-      have_pose = true;
-      for (double& v : saved) in >> v;
-      have_pose = bool(in);
-    }
-  }
-  PixelFormat format;
-  if (!parse_format(format_name, &format) || width <= 0 || height <= 0 || stride == 0) {
-    std::fprintf(stderr, "aprt infer: %s.txt: no usable format/width/height/stride\n", frame);
+  const std::string sidecar_path = std::string(frame) + ".txt";
+  std::string text;
+  if (Status s = read_input_file(sidecar_path.c_str(), 1 << 16, "frame sidecar", &text); !s) {
+    std::fprintf(stderr, "aprt infer: %s (written beside the frame by aprt run --save-frame)\n",
+                 s.error().message());
     return 2;
   }
-  std::ifstream raw(frame, std::ios::binary);
-  std::vector<uint8_t> pixels((std::istreambuf_iterator<char>(raw)),
-                              std::istreambuf_iterator<char>());
-  if (pixels.size() != bytes || bytes < frame_bytes(format, width, height)) {
-    std::fprintf(stderr, "aprt infer: %s has %zu bytes, its .txt says %zu (%dx%d %s)\n", frame,
-                 pixels.size(), bytes, width, height, format_name.c_str());
+  auto side = parse_frame_sidecar(text, sidecar_path.c_str());
+  if (!side) {
+    std::fprintf(stderr, "aprt infer: %s\n", side.error().message());
+    return 2;
+  }
+  const FrameSidecar& sc = side.value();
+  std::string pixels;
+  if (Status s = read_input_file(frame, sc.bytes, "frame", &pixels); !s) {
+    std::fprintf(stderr, "aprt infer: %s\n", s.error().message());
+    return 2;
+  }
+  if (pixels.size() != sc.bytes) {
+    std::fprintf(stderr, "aprt infer: %s has %zu bytes, %s says %zu\n", frame, pixels.size(),
+                 sidecar_path.c_str(), sc.bytes);
     return 2;
   }
   std::unique_ptr<Engine> engine =
@@ -104,12 +78,13 @@ int cmd_infer(int argc, char** argv) {
   if (!engine) return 2;
   Engine& e = *engine;
   const ModelMeta& m = e.meta();
-  auto input = EngineInput::for_images(e, format, width, height);
+  auto input = EngineInput::for_images(e, sc.format, sc.width, sc.height);
   if (!input) {
     std::fprintf(stderr, "aprt infer: %s\n", input.error().message());
     return 2;
   }
-  const ImageView view{pixels.data(), format, width, height, stride};
+  const ImageView view{reinterpret_cast<const uint8_t*>(pixels.data()), sc.format, sc.width,
+                       sc.height, sc.stride};
   input.value()->write_image(view, e);
   (void)e.run();
   const PoseEstimate p = decode_pose(e.output().f32(), m);
@@ -117,7 +92,8 @@ int cmd_infer(int argc, char** argv) {
                           p.orientation[1], p.orientation[2], p.orientation[3]};
   std::printf("pose  %.9g %.9g %.9g %.9g %.9g %.9g %.9g (%s kernels)\n", here[0], here[1], here[2],
               here[3], here[4], here[5], here[6], e.isa());
-  if (!have_pose) return 0;
+  if (!sc.have_pose) return 0;
+  const double* saved = sc.pose;
   double dp = 0, dq = 0;
   for (int k = 0; k < 3; ++k) dp = std::max(dp, std::fabs(here[k] - saved[k]));
   for (int k = 3; k < 7; ++k) dq = std::max(dq, std::fabs(here[k] - saved[k]));

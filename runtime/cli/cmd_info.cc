@@ -87,6 +87,14 @@ int cmd_info(int argc, char** argv) {
   } else {
     std::printf("validation   no measured error in the file\n");
   }
+  if (m.has_uncertainty) {
+    std::printf(
+        "confidence   per pose: 13 outputs, calibration k %.3f (position), %.3f (rotation)\n",
+        double(m.uncertainty_scale[0]), double(m.uncertainty_scale[1]));
+  } else {
+    std::printf("confidence   none: the published covariance is the validation error\n");
+  }
+
   if (m.quantization) {
     size_t int8_ops = 0;
     for (size_t i = 0; i < e.op_count(); ++i) {

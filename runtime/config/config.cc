@@ -1,11 +1,14 @@
 #include "runtime/config/config.h"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <initializer_list>
 
+#include "runtime/base/file_io.h"
 #include "runtime/config/config_reader.h"
 #include "runtime/config/yaml_tree.h"
 
@@ -41,6 +44,12 @@ bool source_type_from_name(const std::string& name, SourceType* out) {
 namespace {
 
 using config::Reader;
+
+// CPUs this machine has (thread and worker pinning refer to them).
+int configured_cpus() {
+  const long n = sysconf(_SC_NPROCESSORS_CONF);
+  return n > 0 ? int(n) : 1;
+}
 using yaml::Node;
 
 Status read_transform(Reader& r, const Node* parent, const char* name, double xyz[3],
@@ -183,7 +192,7 @@ Status read_thread(Reader& r, const Node* root, const char* name, ThreadConfig* 
   Status s;
   if (!(s = r.map(n, path, {"priority", "cpu"}))) return s;
   if (!(s = r.integer(n, path, "priority", 0, 99, &t->priority))) return s;
-  return r.integer(n, path, "cpu", -1, 1023, &t->cpu);
+  return r.integer(n, path, "cpu", -1, long(configured_cpus()) - 1, &t->cpu);
 }
 
 }  // namespace
@@ -242,7 +251,7 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(r.map(e, "engine", {"threads", "isa", "cpus"}));
     APRT_TRY(r.integer(e, "engine", "threads", 1, 16, &c.engine.threads));
     APRT_TRY(r.str(e, "engine", "isa", &c.engine.isa, {"auto", "ref", "avx512", "avx2", "neon"}));
-    APRT_TRY(r.int_list(e, "engine", "cpus", 0, 1023, &c.engine.cpus));
+    APRT_TRY(r.int_list(e, "engine", "cpus", 0, long(configured_cpus()) - 1, &c.engine.cpus));
 
     APRT_TRY(read_source(r, root->get("source"), "source", &c.source));
     APRT_TRY(read_cameras(r, root, &c));
@@ -264,7 +273,7 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
                     "status_rate_hz", "dds", "can"}));
     APRT_TRY(r.boolean(out, "output", "console", &c.output.console));
     APRT_TRY(r.boolean(out, "output", "summary", &c.output.summary));
-    APRT_TRY(r.str(out, "output", "frame_id", &c.output.frame_id));
+    APRT_TRY(r.str(out, "output", "frame_id", &c.output.frame_id, {}, /*non_empty=*/true));
     APRT_TRY(r.num(out, "output", "sigma_position_m", 0, 600, &c.output.sigma_position_m));
     APRT_TRY(r.num(out, "output", "sigma_orientation_deg", 0, 25, &c.output.sigma_orientation_deg));
     APRT_TRY(r.num(out, "output", "status_rate_hz", 0.1, 100, &c.output.status_rate_hz));
@@ -396,13 +405,10 @@ std::vector<Config::Camera> camera_list(const Config& c) {
 }
 
 Expected<Config> load_config(const std::string& path) {
-  FILE* f = std::fopen(path.c_str(), "r");
-  if (!f) return Error(Errc::kIo, "config: cannot open '%s'", path.c_str());
-  std::string text;
-  char buf[4096];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) text.append(buf, n);
-  std::fclose(f);
+  std::string text;  // a regular file of at most 1 MiB: /dev/zero or a FIFO is refused
+  if (Status s = read_input_file(path.c_str(), yaml::kMaxConfigBytes, "config", &text); !s) {
+    return s.error();
+  }
   return parse_config(text, path);
 }
 

@@ -47,9 +47,14 @@ class Reader {
     return ok();
   }
 
+  // non_empty: "" (or a null value) is refused instead of meaning "not set".
   Status str(const Node* m, const std::string& path, const char* key, std::string* out,
-             std::initializer_list<const char*> choices = {}) {
+             std::initializer_list<const char*> choices = {}, bool non_empty = false) {
     const Node* n = m ? m->get(key) : nullptr;
+    if (non_empty && n &&
+        (n->kind == Node::kNull || (n->kind == Node::kScalar && n->scalar.empty()))) {
+      return fail(n, join(path, key), "must not be empty");
+    }
     if (!n || n->kind == Node::kNull) return ok();
     const std::string p = join(path, key);
     if (n->kind != Node::kScalar) return fail(n, p, "expected a string");
@@ -73,8 +78,9 @@ class Reader {
     const std::string p = join(path, key);
     char* end = nullptr;
     errno = 0;
-    const double v =
-        n->kind == Node::kScalar && !n->quoted ? std::strtod(n->scalar.c_str(), &end) : NAN;
+    const double v = n->kind == Node::kScalar && !n->quoted && decimal(n->scalar)
+                         ? std::strtod(n->scalar.c_str(), &end)
+                         : NAN;
     if (n->kind != Node::kScalar || n->quoted || !end || *end || errno || !std::isfinite(v) ||
         v < lo || v > hi) {
       char range[96];
@@ -137,7 +143,9 @@ class Reader {
       const Node* e = n->seq[size_t(i)].get();
       char* end = nullptr;
       errno = 0;
-      const double v = e->kind == Node::kScalar ? std::strtod(e->scalar.c_str(), &end) : NAN;
+      const double v = e->kind == Node::kScalar && decimal(e->scalar)
+                           ? std::strtod(e->scalar.c_str(), &end)
+                           : NAN;
       if (e->kind != Node::kScalar || e->quoted || !end || *end || errno || !std::isfinite(v) ||
           v < lo || v > hi) {
         char range[96];
@@ -173,7 +181,8 @@ class Reader {
       const Node* e = n->seq[i].get();
       char* end = nullptr;
       const long v = e->kind == Node::kScalar ? std::strtol(e->scalar.c_str(), &end, 10) : 0;
-      if (e->kind != Node::kScalar || !end || *end || v < lo || v > hi || e->scalar.empty()) {
+      if (e->kind != Node::kScalar || e->quoted || !end || *end || v < lo || v > hi ||
+          e->scalar.empty()) {
         return fail(
             e, p + "[" + std::to_string(i) + "]",
             "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
@@ -181,6 +190,18 @@ class Reader {
       out->push_back(int(v));
     }
     return ok();
+  }
+
+  // A plain decimal number: digits, one sign, a point, an exponent -- not
+  // strtod's hexadecimal, "inf" or "nan" ("rate_hz: 0x10" is refused).
+  static bool decimal(const std::string& s) {
+    if (s.empty()) return false;
+    for (const char c : s) {
+      if (!((c >= '0' && c <= '9') || c == '+' || c == '-' || c == '.' || c == 'e' || c == 'E')) {
+        return false;
+      }
+    }
+    return true;
   }
 
   static std::string join(const std::string& path, const char* key) {

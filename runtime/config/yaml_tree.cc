@@ -3,8 +3,10 @@
 #include <yaml.h>
 
 #include <cstdio>
-#include <fstream>
-#include <sstream>
+#include <cstring>
+#include <unordered_set>
+
+#include "runtime/base/file_io.h"
 
 namespace aprt::yaml {
 
@@ -33,16 +35,48 @@ struct Parser {
     return true;
   }
 
-  // Builds the node the event `e` starts (e is consumed).
-  std::unique_ptr<Node> node(yaml_event_t& e) {
+  std::nullptr_t fail(int line, const char* what) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "%s:%d: %s", origin.c_str(), line, what);
+    error = buf;
+    return nullptr;
+  }
+
+  // The one tag a configuration may use: !!str, to make a scalar a string
+  // ("!!str 1"). Any other tag would change a value's meaning unseen.
+  const char* tag_problem(const yaml_char_t* tag, bool scalar) const {
+    if (!tag) return nullptr;
+    if (scalar && std::strcmp(reinterpret_cast<const char*>(tag), "tag:yaml.org,2002:str") == 0) {
+      return nullptr;
+    }
+    return "YAML tags are not supported (only !!str on a scalar)";
+  }
+
+  // Builds the node the event `e` starts (e is consumed), at most kMaxDepth
+  // levels deep (the builder recurses).
+  static constexpr int kMaxDepth = 32;
+  std::unique_ptr<Node> node(yaml_event_t& e, int depth = 0) {
     auto n = std::make_unique<Node>();
     n->line = int(e.start_mark.line) + 1;
+    if (depth > kMaxDepth) {
+      yaml_event_delete(&e);
+      return fail(n->line, "nesting deeper than 32 levels");
+    }
+    const yaml_char_t* tag = e.type == YAML_SCALAR_EVENT           ? e.data.scalar.tag
+                             : e.type == YAML_SEQUENCE_START_EVENT ? e.data.sequence_start.tag
+                             : e.type == YAML_MAPPING_START_EVENT  ? e.data.mapping_start.tag
+                                                                   : nullptr;
+    if (const char* why = tag_problem(tag, e.type == YAML_SCALAR_EVENT)) {
+      yaml_event_delete(&e);
+      return fail(n->line, why);
+    }
     switch (e.type) {
       case YAML_SCALAR_EVENT: {
         n->kind = Node::kScalar;
         n->scalar.assign(reinterpret_cast<const char*>(e.data.scalar.value), e.data.scalar.length);
+        // Quoted, or tagged !!str: a string, never a number or null.
         n->quoted = e.data.scalar.style == YAML_SINGLE_QUOTED_SCALAR_STYLE ||
-                    e.data.scalar.style == YAML_DOUBLE_QUOTED_SCALAR_STYLE;
+                    e.data.scalar.style == YAML_DOUBLE_QUOTED_SCALAR_STYLE || tag != nullptr;
         if (!n->quoted && (n->scalar == "~" || n->scalar == "null" || n->scalar.empty())) {
           n->kind = Node::kNull;
         }
@@ -59,7 +93,7 @@ struct Parser {
             yaml_event_delete(&c);
             return n;
           }
-          auto child = node(c);
+          auto child = node(c, depth + 1);
           if (!child) return nullptr;
           n->seq.push_back(std::move(child));
         }
@@ -67,6 +101,7 @@ struct Parser {
       case YAML_MAPPING_START_EVENT: {
         n->kind = Node::kMap;
         yaml_event_delete(&e);
+        std::unordered_set<std::string> keys;  // a duplicate check in constant time per key
         for (;;) {
           yaml_event_t k;
           if (!next(&k)) return nullptr;
@@ -85,18 +120,16 @@ struct Parser {
           std::string key(reinterpret_cast<const char*>(k.data.scalar.value), k.data.scalar.length);
           const int key_line = int(k.start_mark.line) + 1;
           yaml_event_delete(&k);
-          for (const auto& [existing, unused] : n->map) {
-            if (existing == key) {
-              char buf[256];
-              std::snprintf(buf, sizeof buf, "%s:%d: key '%s' appears twice", origin.c_str(),
-                            key_line, key.c_str());
-              error = buf;
-              return nullptr;
-            }
+          if (!keys.insert(key).second) {
+            char buf[256];
+            std::snprintf(buf, sizeof buf, "%s:%d: key '%.120s' appears twice", origin.c_str(),
+                          key_line, key.c_str());
+            error = buf;
+            return nullptr;
           }
           yaml_event_t v;
           if (!next(&v)) return nullptr;
-          auto child = node(v);
+          auto child = node(v, depth + 1);
           if (!child) return nullptr;
           n->map.emplace_back(std::move(key), std::move(child));
         }
@@ -152,11 +185,11 @@ Expected<std::unique_ptr<Node>> parse(const std::string& text, const std::string
 }
 
 Expected<std::unique_ptr<Node>> parse_file(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) return Error(Errc::kIo, "config: cannot open '%s'", path.c_str());
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return parse(ss.str(), path);
+  std::string text;
+  if (Status s = read_input_file(path.c_str(), kMaxConfigBytes, "config", &text); !s) {
+    return s.error();
+  }
+  return parse(text, path);
 }
 
 }  // namespace aprt::yaml

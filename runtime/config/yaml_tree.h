@@ -24,7 +24,12 @@ struct Node {
   const Node* get(const std::string& key) const;
 };
 
-// Parses text; errors name the file (`origin`) and line.
+// A configuration file is at most this large (a regular file: a FIFO or a
+// device at the path is refused).
+inline constexpr size_t kMaxConfigBytes = size_t(1) << 20;
+
+// Parses text; errors name the file (`origin`) and line. Nesting deeper than
+// 32 levels, aliases, tags other than !!str and duplicate keys are refused.
 Expected<std::unique_ptr<Node>> parse(const std::string& text, const std::string& origin);
 Expected<std::unique_ptr<Node>> parse_file(const std::string& path);
 

@@ -14,6 +14,7 @@
 
 #include "kernels/table/cpu_features.h"
 #include "runtime/base/check.h"
+#include "runtime/base/file_io.h"
 #include "runtime/engine/denormals.h"
 #include "runtime/engine/memory_planner.h"
 
@@ -310,30 +311,36 @@ Expected<std::unique_ptr<Engine>> Engine::load_memory(const uint8_t* data, size_
 }
 
 Expected<std::vector<uint8_t>> Engine::read_model_file(const char* path) {
-  const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
-  APRT_ENSURE(fd >= 0, Errc::kIo, "model_bin: cannot open '%s': %s", path, std::strerror(errno));
-  struct stat st {};
-  if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    ::close(fd);
-    return Error(Errc::kIo, "model_bin: '%s' is not a regular file", path);
-  }
-  if (uint64_t(st.st_size) > kMaxModelFileBytes) {
-    ::close(fd);
-    return Error(Errc::kTooLarge, "model_bin: '%s' is %lld bytes (limit 4 GiB)", path,
-                 static_cast<long long>(st.st_size));
+  // Never blocks on what is not a file (a FIFO, a device: refused at open),
+  // and reads the header before the body: a large file that is no model, or
+  // whose header disagrees with its size, is refused after 64 bytes.
+  auto f = open_input_file(path, kMaxModelFileBytes, "model_bin");
+  if (!f) return f.error();
+  const uint64_t size = f->size();
+  uint8_t head[format::kHeaderBytes];
+  const long got_head = f->read(head, size < sizeof head ? size_t(size) : sizeof head);
+  APRT_ENSURE(got_head >= 0, Errc::kIo, "model_bin: cannot read '%s': %s", path,
+              std::strerror(errno));
+  APRT_ENSURE(uint64_t(got_head) == size || got_head == long(sizeof head), Errc::kIo,
+              "model_bin: short read on '%s'", path);
+  APRT_ENSURE(size >= 8 && std::memcmp(head, format::kMagic, 8) == 0, Errc::kBadMagic,
+              "model_bin: '%s' is not an aprt model file (bad magic)", path);
+  if (size >= sizeof head) {
+    uint64_t declared = 0;
+    std::memcpy(&declared, head + 16, 8);
+    APRT_ENSURE(declared == size, declared > size ? Errc::kTruncated : Errc::kBadHeader,
+                "model_bin: '%s': header says %llu bytes, file has %llu (%s)", path,
+                static_cast<unsigned long long>(declared), static_cast<unsigned long long>(size),
+                declared > size ? "file truncated?" : "trailing data?");
   }
   std::vector<uint8_t> bytes;
-  bytes.resize(size_t(st.st_size));
-  size_t got = 0;
-  while (got < bytes.size()) {
-    const ssize_t r = ::read(fd, bytes.data() + got, bytes.size() - got);
-    if (r < 0 && errno == EINTR) continue;
-    if (r <= 0) break;
-    got += size_t(r);
-  }
-  ::close(fd);
-  APRT_ENSURE(got == bytes.size(), Errc::kIo, "model_bin: short read on '%s' (%zu of %zu bytes)",
-              path, got, bytes.size());
+  bytes.resize(size_t(size));
+  std::memcpy(bytes.data(), head, size_t(got_head));
+  const long rest = f->read(bytes.data() + got_head, bytes.size() - size_t(got_head));
+  APRT_ENSURE(rest >= 0 && uint64_t(got_head) + uint64_t(rest) == size, Errc::kIo,
+              "model_bin: short read on '%s' (%lld of %llu bytes; changed while read?)", path,
+              static_cast<long long>(got_head + (rest > 0 ? rest : 0)),
+              static_cast<unsigned long long>(size));
   return bytes;
 }
 

@@ -18,6 +18,14 @@ T load(const uint8_t* p) {
   return v;
 }
 
+// Reserved bytes and flags must be 0 (FORMAT.md).
+inline bool all_zero(const uint8_t* p, size_t n) {
+  for (size_t i = 0; i < n; ++i) {
+    if (p[i] != 0) return false;
+  }
+  return true;
+}
+
 // n bytes of a string field into dst (cap bytes, always NUL-terminated).
 inline void copy_str(char* dst, size_t cap, const uint8_t* src, size_t n) {
   const size_t k = n < cap - 1 ? n : cap - 1;

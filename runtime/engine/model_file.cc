@@ -148,6 +148,9 @@ class ModelFileParser {
                 "model_bin: header says %llu bytes, file has %zu (trailing data?)",
                 static_cast<unsigned long long>(declared), size_);
     file_.file_bytes_ = declared;
+    APRT_ENSURE(load<uint32_t>(data_ + 32) == 0 && all_zero(data_ + 40, 24), Errc::kBadHeader,
+                "model_bin: header flags or reserved bytes are not 0 (FORMAT.md: they must be; "
+                "a file of another writer?)");
     section_count_ = load<uint32_t>(data_ + 24);
     APRT_ENSURE(section_count_ >= 1 && section_count_ <= format::kMaxSections, Errc::kBadHeader,
                 "model_bin: %u sections (1..%u allowed)", section_count_, format::kMaxSections);
@@ -177,6 +180,8 @@ class ModelFileParser {
       s.size = load<uint64_t>(e + 16);
       s.crc = load<uint32_t>(e + 24);
       const char* name = section_name(s.tag);
+      APRT_ENSURE(load<uint32_t>(e + 4) == 0 && load<uint32_t>(e + 28) == 0, Errc::kBadHeader,
+                  "model_bin: section %s: flags or reserved field not 0", name);
       APRT_ENSURE(s.offset % format::kAlign == 0, Errc::kMisaligned,
                   "model_bin: section %s offset %llu is not %u-byte aligned", name,
                   static_cast<unsigned long long>(s.offset), format::kAlign);
@@ -248,6 +253,8 @@ class ModelFileParser {
     APRT_ENSURE(load<uint32_t>(s->data + 4) == entry_bytes, Errc::kBadHeader,
                 "model_bin: %s entries are %u bytes, expected %u", what,
                 load<uint32_t>(s->data + 4), entry_bytes);
+    APRT_ENSURE(all_zero(s->data + 8, 8), Errc::kBadHeader,
+                "model_bin: %s table header: reserved words not 0", what);
     APRT_ENSURE(*count >= 1 && *count <= max_count, Errc::kTooLarge,
                 "model_bin: %u %s entries (1..%u allowed)", *count, what, max_count);
     APRT_ENSURE(s->size == format::kTablePrefixBytes + uint64_t(*count) * entry_bytes,
@@ -277,6 +284,8 @@ class ModelFileParser {
       const uint8_t dtype = e[4];
       t.rank = e[5];
       const uint8_t kind = e[6];
+      APRT_ENSURE(e[7] == 0 && all_zero(e + 52, 12), Errc::kBadTensor,
+                  "model_bin: tensor %u '%s': flags or reserved bytes not 0", i, t.name);
       APRT_ENSURE(dtype >= 1 && dtype <= 4, Errc::kBadTensor,
                   "model_bin: tensor %u '%s' has unknown dtype %u", i, t.name, dtype);
       APRT_ENSURE(kind >= 1 && kind <= 4, Errc::kBadTensor,

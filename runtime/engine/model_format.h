@@ -29,6 +29,9 @@ inline constexpr int kMaxRank = 4;
 inline constexpr uint32_t kMaxDim = 1u << 20;
 inline constexpr uint64_t kMaxTensorElements = 1ull << 28;
 inline constexpr uint32_t kMaxTensors = 1u << 16;
+// Pose bounds (META pose_min/pose_max): a map frame's coordinates and extent, metres.
+inline constexpr float kMaxPoseCoordinate = 1e7f;
+inline constexpr float kMaxPoseExtent = 1e6f;
 inline constexpr uint32_t kMaxOps = 1u << 15;
 
 constexpr uint32_t fourcc(char a, char b, char c, char d) {

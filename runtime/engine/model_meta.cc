@@ -15,6 +15,7 @@ using format::MetaType;
 Status parse_model_meta(const uint8_t* data, uint64_t size, ModelMeta* out) {
   ModelMeta& m = *out;
   uint64_t seen = 0;  // bit per known key index
+  int std_channels = 0;
   auto mark = [&](int bit) { seen |= uint64_t(1) << bit; };
   uint64_t pos = 0;
   while (pos < size) {
@@ -87,8 +88,7 @@ Status parse_model_meta(const uint8_t* data, uint64_t size, ModelMeta* out) {
           APRT_ENSURE(m.norm_std[i] > 0.0f, Errc::kBadMetadata,
                       "model_bin: norm_std[%u] = %g must be positive", i, m.norm_std[i]);
         }
-        APRT_ENSURE(int(len / 4) == m.norm_channels || m.norm_channels == 0, Errc::kBadMetadata,
-                    "model_bin: norm_mean and norm_std have different lengths");
+        std_channels = int(len / 4);  // compared with norm_mean's after the loop (any order)
         mark(5);
         break;
       case MetaKey::kResizePolicy: {
@@ -201,10 +201,24 @@ Status parse_model_meta(const uint8_t* data, uint64_t size, ModelMeta* out) {
     APRT_ENSURE(seen & (uint64_t(1) << bit), Errc::kBadMetadata,
                 "model_bin: required metadata '%s' is missing", kRequired[bit]);
   }
+  APRT_ENSURE(std_channels == m.norm_channels, Errc::kBadMetadata,
+              "model_bin: %d norm_mean values but %d norm_std values", m.norm_channels,
+              std_channels);
   for (int i = 0; i < 3; ++i) {
     APRT_ENSURE(m.pose_min[i] < m.pose_max[i], Errc::kBadMetadata,
                 "model_bin: pose bounds axis %d: min %g >= max %g", i, m.pose_min[i],
                 m.pose_max[i]);
+    // A map frame's coordinates (UTM northings reach 1e7 m) and a map's
+    // extent: beyond these a bound is corrupt, and poses decoded from it
+    // would go out as valid (the bounds test passes anything inside them).
+    APRT_ENSURE(std::fabs(m.pose_min[i]) <= format::kMaxPoseCoordinate &&
+                    std::fabs(m.pose_max[i]) <= format::kMaxPoseCoordinate &&
+                    m.pose_max[i] - m.pose_min[i] <= format::kMaxPoseExtent,
+                Errc::kBadMetadata,
+                "model_bin: pose bounds axis %d [%g, %g] m: coordinates at most %g m, an extent "
+                "at most %g m",
+                i, m.pose_min[i], m.pose_max[i], double(format::kMaxPoseCoordinate),
+                double(format::kMaxPoseExtent));
   }
   APRT_ENSURE(m.nheads > 0 && m.d_model > 0 && m.d_model % m.nheads == 0, Errc::kBadMetadata,
               "model_bin: d_model %u is not a positive multiple of nheads %u", m.d_model, m.nheads);

@@ -72,6 +72,38 @@ void* ThreadPool::worker_main(void* arg) {
   return nullptr;
 }
 
+namespace {
+
+constexpr uint64_t kGenMask = (uint64_t(1) << 28) - 1;
+
+uint64_t pack(uint32_t generation, int n_tasks, int next) {
+  return (uint64_t(generation) & kGenMask) << 36 | uint64_t(n_tasks) << 18 | uint64_t(next);
+}
+
+}  // namespace
+
+void ThreadPool::claim_and_run(uint32_t generation, int thread) noexcept {
+  const uint64_t gen = uint64_t(generation) & kGenMask;
+  uint64_t c = job_.claim.load(std::memory_order_acquire);
+  for (;;) {
+    if ((c >> 36) != gen) return;  // a later job: this one is done (we were late)
+    const int n = int((c >> 18) & kMaxTasksPerJob), next = int(c & kMaxTasksPerJob);
+    if (next >= n) return;
+    // Read the job before claiming. If the claim succeeds, task `next` was
+    // unclaimed, so the job was not complete and the caller had not begun
+    // to write the next one: what was read is this job's.
+    const TaskFn fn = job_.fn.load(std::memory_order_relaxed);
+    void* const ctx = job_.ctx.load(std::memory_order_relaxed);
+    if (!job_.claim.compare_exchange_weak(c, c + 1, std::memory_order_acq_rel,
+                                          std::memory_order_acquire)) {
+      continue;  // c holds the word now
+    }
+    fn(ctx, next, thread);
+    job_.completed.fetch_add(1, std::memory_order_release);
+    c = job_.claim.load(std::memory_order_acquire);
+  }
+}
+
 void ThreadPool::worker_loop(int index) {
   // Generation 0 is the pool's state at creation; a job published before this
   // thread first ran is generation 1 and must not be mistaken for "seen".
@@ -93,14 +125,7 @@ void ThreadPool::worker_loop(int index) {
     }
     seen = g;
     if (job_.stop.load(std::memory_order_acquire)) return;
-    const int n = job_.n_tasks;
-    TaskFn fn = job_.fn;
-    void* ctx = job_.ctx;
-    for (int t = job_.next.fetch_add(1, std::memory_order_relaxed); t < n;
-         t = job_.next.fetch_add(1, std::memory_order_relaxed)) {
-      fn(ctx, t, index);
-    }
-    job_.done.fetch_add(1, std::memory_order_acq_rel);
+    claim_and_run(g, index);
   }
 }
 
@@ -115,19 +140,48 @@ void ThreadPool::run(int n_tasks, TaskFn fn, void* ctx) noexcept {
     for (int t = 0; t < n_tasks; ++t) fn(ctx, t, 0);
     return;
   }
-  job_.n_tasks = n_tasks;
-  job_.fn = fn;
-  job_.ctx = ctx;
-  job_.next.store(0, std::memory_order_relaxed);
-  job_.done.store(0, std::memory_order_relaxed);
-  job_.generation.fetch_add(1, std::memory_order_seq_cst);  // publishes the job
-  wake_sleepers();
-  for (int t = job_.next.fetch_add(1, std::memory_order_relaxed); t < n_tasks;
-       t = job_.next.fetch_add(1, std::memory_order_relaxed)) {
-    fn(ctx, t, 0);
+  // More tasks than the claim word counts: in jobs of at most that many
+  // (no op comes near; the engine's largest has a few thousand).
+  for (int first = 0; first < n_tasks; first += kMaxTasksPerJob) {
+    if (first == 0 && n_tasks <= kMaxTasksPerJob) {
+      run_job(n_tasks, fn, ctx);
+      return;
+    }
+    struct Slice {
+      TaskFn fn;
+      void* ctx;
+      int first;
+    } slice{fn, ctx, first};
+    const int n = n_tasks - first < kMaxTasksPerJob ? n_tasks - first : kMaxTasksPerJob;
+    run_job(
+        n,
+        [](void* p, int t, int thread) {
+          const Slice& s = *static_cast<const Slice*>(p);
+          s.fn(s.ctx, s.first + t, thread);
+        },
+        &slice);
   }
-  // Every worker acknowledges the job, so none still reads it when the next starts.
-  while (job_.done.load(std::memory_order_acquire) < workers_) cpu_relax();
+}
+
+void ThreadPool::run_job(int n_tasks, TaskFn fn, void* ctx) noexcept {
+  job_.fn.store(fn, std::memory_order_relaxed);
+  job_.ctx.store(ctx, std::memory_order_relaxed);
+  job_.completed.store(0, std::memory_order_relaxed);
+  const uint32_t g = job_.generation.load(std::memory_order_relaxed) + 1;
+  job_.claim.store(pack(g, n_tasks, 0), std::memory_order_release);
+  job_.generation.store(g, std::memory_order_seq_cst);  // publishes the job
+  wake_sleepers();
+  claim_and_run(g, 0);
+  // Only claimed tasks are waited for: every task is claimed by now (the
+  // caller's own loop ended), and a claimant finishes what it took. A
+  // claimant preempted in the middle of its task is waited for politely.
+  for (int spins = 0; job_.completed.load(std::memory_order_acquire) < n_tasks; ++spins) {
+    if (spins < 4000) {
+      cpu_relax();
+    } else {
+      sched_yield();
+    }
+  }
 }
 
 void ThreadPool::frame_begin() noexcept {

@@ -4,9 +4,17 @@
 // afterwards. The calling thread takes part as thread 0. Between
 // run_frame_begin() and run_frame_end() the workers spin on an atomic
 // generation counter, so starting an op costs no system call; outside a frame
-// they sleep on a futex with a timeout. Tasks are claimed from an atomic
-// counter; a task's result never depends on which thread ran it, so results
-// are identical for any thread count.
+// they sleep on a futex with a timeout. Tasks are claimed from one atomic
+// word (the job's generation, task count and next task): a task's result
+// never depends on which thread ran it, so results are identical for any
+// thread count.
+//
+// The caller waits only for tasks that were claimed, never for a worker to
+// show up: a worker the scheduler has preempted (another process on its
+// core) simply finds the job done when it runs again, and the caller has
+// taken its share. (It waited for every worker to acknowledge each job
+// before: one preempted worker stalled the frame for a scheduler time slice,
+// which is what made two threads' p99 four times their median.)
 #pragma once
 
 #include <pthread.h>
@@ -47,16 +55,26 @@ class ThreadPool {
   void worker_loop(int index);
   void wake_sleepers() noexcept;
 
+  // The claim word: generation (28 bits) | task count (18) | next task (18).
+  static constexpr int kTaskBits = 18;
+  static constexpr int kMaxTasksPerJob = (1 << kTaskBits) - 1;
+  // Claims and runs tasks of job `generation` until none is left or the job
+  // is no longer current; `thread` is the claimant's index.
+  void claim_and_run(uint32_t generation, int thread) noexcept;
+  void run_job(int n_tasks, TaskFn fn, void* ctx) noexcept;
+
   struct alignas(64) Job {
-    std::atomic<uint32_t> generation{0};
-    std::atomic<int> next{0};
-    std::atomic<int> done{0};
+    std::atomic<uint32_t> generation{0};  // futex word: bumped per job
+    std::atomic<uint64_t> claim{0};
+    std::atomic<int> completed{0};  // tasks of the current job finished
     std::atomic<int> sleeping{0};
     std::atomic<bool> spinning{false};
     std::atomic<bool> stop{false};
-    int n_tasks = 0;
-    TaskFn fn = nullptr;
-    void* ctx = nullptr;
+    // The job, written by the caller before the claim word; read by a
+    // claimant before its claim succeeds (a successful claim proves them
+    // current: see claim_and_run).
+    std::atomic<TaskFn> fn{nullptr};
+    std::atomic<void*> ctx{nullptr};
   };
   Job job_;
   int workers_ = 0;

@@ -1,6 +1,22 @@
 #include "runtime/loop/fault_injector.h"
 
+#include <poll.h>
+#include <unistd.h>
+
+#include <climits>
+
 namespace aprt {
+
+void FaultInjector::block(int64_t ns) noexcept {
+  int fds[2];
+  if (pipe(fds) != 0) return;
+  pollfd p{fds[0], POLLIN, 0};
+  const int64_t ms = ns / 1000000;
+  // One call; a signal (EINTR) ends it early, as it would a real stuck read.
+  (void)poll(&p, 1, ms > INT_MAX ? INT_MAX : int(ms));
+  close(fds[0]);
+  close(fds[1]);
+}
 
 Status FaultInjector::configure(const std::vector<FaultSpec>& faults) {
   if (faults.size() > size_t(kMaxFaults)) {

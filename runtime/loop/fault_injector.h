@@ -38,6 +38,10 @@ class FaultInjector {
   bool publish_failure(uint64_t pose_index) const noexcept {
     return n_ && in_window(FaultKind::kPublishFailure, pose_index);
   }
+  // Blocks the calling thread in one system call for `ns` (poll(2) on a pipe
+  // nobody writes), whatever the stop flag says: the injected hang is a
+  // thread stuck in the kernel, like a read from a FIFO or a vanished device.
+  static void block(int64_t ns) noexcept;
 
  private:
   int64_t once(FaultKind k, uint64_t i) const noexcept;

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <cstring>
 
+#include "runtime/base/file_io.h"
+
 #if defined(APRT_HAVE_SODIUM)
 #include <sodium.h>
 #endif
@@ -46,14 +48,11 @@ bool unhex(const std::string& s, uint8_t* out, size_t n) {
 
 // The first line of a small text file, split into words.
 Expected<std::string> first_line(const std::string& path, const char* what) {
-  FILE* f = std::fopen(path.c_str(), "r");
-  if (!f)
-    return Error(Errc::kIo, "%s: cannot open '%s': %s", what, path.c_str(), std::strerror(errno));
-  char buf[512] = {};
-  const bool got = std::fgets(buf, sizeof buf, f) != nullptr;
-  std::fclose(f);
-  if (!got) return Error(Errc::kInvalidArgument, "%s: '%s' is empty", what, path.c_str());
-  std::string line(buf);
+  // A key or signature file is one short line: a regular file of at most 4 KiB.
+  std::string text;
+  if (Status s = read_input_file(path.c_str(), 4096, what, &text); !s) return s.error();
+  if (text.empty()) return Error(Errc::kInvalidArgument, "%s: '%s' is empty", what, path.c_str());
+  std::string line = text.substr(0, text.find('\n'));
   while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
   return line;
 }

@@ -104,7 +104,8 @@ void Publisher::run() noexcept {
     last_inference_ms = double(r.inference_end_ns - r.inference_start_ns) * 1e-6;
     last_fusion = r.fusion;
     if (timing_count_ < timings_.size()) {
-      timings_[timing_count_++] = {r.capture_ns, r.inference_start_ns, r.inference_end_ns, now};
+      timings_[timing_count_++] = {r.capture_ns, r.inference_start_ns, r.inference_end_ns, now,
+                                   r.flags};
     }
     shared_.published.fetch_add(1, std::memory_order_release);
     if (r.has_truth && error_count_ < pos_errors_.size()) {
@@ -121,7 +122,7 @@ void Publisher::run() noexcept {
 
 void Publisher::print_pose(const PoseRecord& r) const {
   char flags[160];
-  pose_flags_text(r.flags & 0xff, flags, sizeof flags);
+  pose_flags_text(r.flags & 0x1f, flags, sizeof flags);
   const auto add = [&](const char* what) {
     std::strncat(flags, what, sizeof flags - std::strlen(flags) - 1);
   };

@@ -10,6 +10,7 @@ namespace aprt {
 // Per-frame stage timings (monotonic ns), recorded by the publish thread.
 struct TimingRecord {
   int64_t capture_ns, inference_start_ns, inference_end_ns, publish_ns;
+  uint32_t flags;  // the pose's (runtime/pose/pose_flags.h)
 };
 
 struct RunStats {

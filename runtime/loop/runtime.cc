@@ -1,7 +1,9 @@
 #include "runtime/loop/runtime.h"
 
+#include <pthread.h>
 #include <sys/mman.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -9,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "drivers/codec/frame_sidecar.h"
 #include "runtime/loop/model_loader.h"
 #include "runtime/loop/rt_thread.h"
 #include "runtime/loop/run_report.h"
@@ -70,17 +73,47 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
 
 Runtime::~Runtime() {
   request_stop();
-  join_threads();
+  if (const char* stuck = join_threads_by(monotonic_ns() + kStopBoundNs)) {
+    exit_stuck(stuck, kFaultExitCode);
+  }
 }
 
-void Runtime::join_threads() {
+const char* Runtime::join_threads_by(int64_t deadline_ns) {
+  const timespec until{time_t(deadline_ns / 1000000000), long(deadline_ns % 1000000000)};
+  auto join = [&](pthread_t t) {
+    return pthread_clockjoin_np(t, nullptr, CLOCK_MONOTONIC, &until);
+  };
   for (auto& c : channels_) {
-    if (c->started) pthread_join(c->thread, nullptr);
+    if (c->started && join(c->thread) != 0) return c->thread_name.c_str();
     c->started = false;
   }
-  if (inference_started_) pthread_join(inference_, nullptr);
-  if (publish_started_) pthread_join(publish_, nullptr);
-  inference_started_ = publish_started_ = false;
+  if (inference_started_ && join(inference_) != 0) return "aprt-infer";
+  inference_started_ = false;
+  if (publish_started_ && join(publish_) != 0) return "aprt-publish";
+  publish_started_ = false;
+  if (models_ && !models_->stop_loader(deadline_ns)) return "aprt-reload";
+  return nullptr;
+}
+
+void Runtime::exit_stuck(const char* stage, int code) {
+  // Nothing a stuck thread may still touch is read or freed: the counters are
+  // atomics; the summary, the outputs and the engine are left as they are.
+  std::fprintf(stderr,
+               "aprt run: state FAULT (stage %s did not stop within %.1f s: blocked in a system "
+               "call?); exiting without it\n",
+               stage, double(kStopBoundNs) * 1e-9);
+  std::fprintf(stderr, "aprt run: %llu poses (%llu flagged) before the stop\n",
+               static_cast<unsigned long long>(shared_.poses.load()),
+               static_cast<unsigned long long>(shared_.poses_flagged.load()));
+  if (config_.supervisor.systemd) {
+    char msg[160];
+    std::snprintf(msg, sizeof msg, "STATUS=FAULT: stage %s stuck at stop\nSTOPPING=1", stage);
+    sd_notify_text(msg);
+  }
+  std::fflush(stdout);
+  std::fflush(stderr);
+  // No watchdog magic close: a supervised ECU resets.
+  _exit(code == 0 ? kFaultExitCode : code);
 }
 
 void* Runtime::inference_main(void* self) {
@@ -144,12 +177,10 @@ void Runtime::inference_loop() {
       frames[i] = g;
     }
     if (const int64_t hang = faults_.hang_ns(index)) {
-      // A hung stage: no beat, so the supervisor must see it (FAULT, watchdog unpetted).
-      const int64_t until = monotonic_ns() + hang;
-      while (!shared_.stop.load(std::memory_order_acquire) && monotonic_ns() < until) {
-        const timespec ts{0, 5000000};
-        nanosleep(&ts, nullptr);
-      }
+      // A hung stage as a real one hangs: blocked in the kernel, deaf to the
+      // stop flag (FaultInjector::block). The supervisor must see it (FAULT,
+      // watchdog unpetted) and end the process without this thread.
+      FaultInjector::block(hang);
     }
     flags |= est.infer(*e, frames, faults_.nan_output(index), &rec);
     if (trigger.scans()) {
@@ -259,6 +290,12 @@ int Runtime::run() {
     }
     c->started = true;
   }
+  if (!(s = models_->start_loader())) {
+    std::fprintf(stderr, "aprt run: %s\n", s.error().message());
+    request_stop();
+    set_fatal_handler(previous);
+    return 1;
+  }
   supervision_->ready();
   const int64_t period = int64_t(1e9 / config_.supervisor.rate_hz);
   int code = 0;
@@ -278,7 +315,7 @@ int Runtime::run() {
     }
   }
   request_stop();
-  join_threads();
+  if (const char* stuck = join_threads_by(monotonic_ns() + kStopBoundNs)) exit_stuck(stuck, code);
   set_fatal_handler(previous);
   publisher_->print_state_lines();  // the last change (STOPPING, FAULT) after the last pose
   end_ = {true, allocation_count_ ? allocation_count_() : 0, current_rss_kb()};
@@ -322,20 +359,22 @@ void Runtime::collect_stats() {
 }
 
 void Runtime::write_saved_frame(const FrameBuffer& f, const PoseRecord& rec, const Engine& e) {
+  FrameSidecar side;
+  side.format = f.info.format;
+  side.width = f.info.width;
+  side.height = f.info.height;
+  side.stride = f.info.stride;
+  side.bytes = f.info.bytes;
+  const PoseEstimate& p = rec.pose;
+  const double pose[7] = {p.position[0],    p.position[1],    p.position[2],   p.orientation[0],
+                          p.orientation[1], p.orientation[2], p.orientation[3]};
+  std::copy(pose, pose + 7, side.pose);
+  const std::string text =
+      format_frame_sidecar(side, f.info.name, config_.model.c_str(), e.isa(), p.flags);
   FILE* raw = std::fopen(save_path_.c_str(), "wb");
   FILE* txt = std::fopen((save_path_ + ".txt").c_str(), "w");
-  bool ok = raw && txt && std::fwrite(f.data, 1, f.info.bytes, raw) == f.info.bytes;
-  if (txt) {
-    const PoseEstimate& p = rec.pose;
-    ok = std::fprintf(txt,
-                      "format %s\nwidth %d\nheight %d\nstride %zu\nbytes %zu\nname %s\n"
-                      "model %s\nisa %s\npose %.9g %.9g %.9g %.9g %.9g %.9g %.9g\nflags %u\n",
-                      pixel_format_name(f.info.format), f.info.width, f.info.height, f.info.stride,
-                      f.info.bytes, f.info.name, config_.model.c_str(), e.isa(), p.position[0],
-                      p.position[1], p.position[2], p.orientation[0], p.orientation[1],
-                      p.orientation[2], p.orientation[3], p.flags) > 0 &&
-         ok;
-  }
+  bool ok = raw && txt && std::fwrite(f.data, 1, f.info.bytes, raw) == f.info.bytes &&
+            std::fwrite(text.data(), 1, text.size(), txt) == text.size();
   if (raw) ok = std::fclose(raw) == 0 && ok;
   if (txt) ok = std::fclose(txt) == 0 && ok;
   std::fprintf(stderr, "aprt run: %s frame %s to %s\n", ok ? "saved" : "could not save",

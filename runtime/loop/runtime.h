@@ -92,7 +92,10 @@ class Runtime {
   void sample_memory();
   void collect_stats();
   void write_saved_frame(const FrameBuffer& f, const PoseRecord& rec, const Engine& e);
-  void join_threads();
+  // Joins every started thread by `deadline_ns` (monotonic); the name of the
+  // first that did not stop by then, or nullptr.
+  const char* join_threads_by(int64_t deadline_ns);
+  [[noreturn]] void exit_stuck(const char* stage, int code);
 
   Config config_;
   LoopShared shared_;
@@ -118,6 +121,11 @@ class Runtime {
   // RSS growth is measured from here: the first poses touch preallocated
   // pages (decoder buffers sized for the largest file, stacks) for the first time.
   static constexpr uint64_t kRssWarmupPoses = 1000;
+  // Every stage waits with timeouts of at most kLoopWaitNs, so a stop takes
+  // milliseconds; a stage still running after this is blocked in the kernel
+  // (a read that never returns), and the process ends without it: a FAULT
+  // must end the process (docs/supervision.md).
+  static constexpr int64_t kStopBoundNs = 1500000000;
   RunStats stats_;
 };
 

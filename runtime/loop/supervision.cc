@@ -89,7 +89,7 @@ RunState Supervision::tick(const Health& h, LoopShared& shared) noexcept {
     }
     last_ = st;
   }
-  if (st != RunState::kFault && sm_.stages_alive(h)) {
+  if (st != RunState::kFault && sm_.stages_alive()) {
     if (watchdog_) watchdog_->pet();
     if (cfg_.systemd) sd_notify_text("WATCHDOG=1");
   }

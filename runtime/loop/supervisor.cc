@@ -1,5 +1,7 @@
 #include "runtime/loop/supervisor.h"
 
+#include <algorithm>
+
 namespace aprt {
 
 const char* run_state_name(RunState s) {
@@ -18,20 +20,49 @@ void Supervisor::set(RunState s, const char* why) noexcept {
   reason_ = why;
 }
 
-bool Supervisor::stages_alive(const Health& h) const noexcept {
+bool Supervisor::alive(const Health& h) const noexcept {
   // A stage that has not beaten for two frame timeouts is hung.
   const int64_t limit = int64_t(2.0 * cfg_.frame_timeout_ms * 1e6);
   return h.now_ns - h.capture_beat_ns < limit && h.now_ns - h.inference_beat_ns < limit &&
          h.now_ns - h.publish_beat_ns < limit;
 }
 
-RunState Supervisor::step(const Health& h) noexcept {
+// The supervisor ticks at rate_hz at a high priority: a gap of more than a
+// frame timeout between two of its steps means the whole process stood still
+// (SIGSTOP/SIGCONT, a paused VM, a debugger), not that one stage hung --
+// every beat and the newest frame are old by the same gap. For two frame
+// timeouts after such a gap, nothing is judged older than the moment the
+// process resumed: stages that beat again by then are well; a stage that
+// still does not is hung (FAULT), as before.
+Health Supervisor::after_freeze(const Health& h) noexcept {
+  const int64_t timeout = int64_t(cfg_.frame_timeout_ms * 1e6);
+  if (last_step_ns_ != 0 && h.now_ns - last_step_ns_ > timeout) {
+    resumed_ns_ = h.now_ns;
+    ++freezes_;
+  }
+  last_step_ns_ = h.now_ns;
+  Health g = h;
+  if (resumed_ns_ != 0 && h.now_ns - resumed_ns_ < 2 * timeout) {
+    g.capture_beat_ns = std::max(g.capture_beat_ns, resumed_ns_);
+    g.inference_beat_ns = std::max(g.inference_beat_ns, resumed_ns_);
+    g.publish_beat_ns = std::max(g.publish_beat_ns, resumed_ns_);
+    if (g.last_frame_ns != 0) g.last_frame_ns = std::max(g.last_frame_ns, resumed_ns_);
+    // The pose in flight during the freeze is late by the freeze, not by a
+    // slow stage: its deadline and staleness flags say nothing of health.
+    g.last_flags &= ~(kPoseDeadlineMissed | kPoseStaleFrame);
+  }
+  return g;
+}
+
+RunState Supervisor::step(const Health& health) noexcept {
+  const Health h = after_freeze(health);
+  alive_ = alive(h);
   if (state_ == RunState::kFault || state_ == RunState::kStopping) return state_;
   if (h.end_of_stream) {
     set(RunState::kStopping, "end of the replayed sequence");
     return state_;
   }
-  if (!stages_alive(h)) {
+  if (!alive_) {
     set(RunState::kFault, "a stage stopped beating (hung thread)");
     return state_;
   }

@@ -33,15 +33,25 @@ class Supervisor {
   RunState state() const { return state_; }
   const char* reason() const { return reason_; }
   // True when every stage beat recently: only then is the watchdog petted.
-  bool stages_alive(const Health& h) const noexcept;
+  // (The snapshot step() last judged, after its freeze allowance.)
+  bool stages_alive() const noexcept { return alive_; }
+  // Whole-process freezes seen (SIGSTOP, a paused VM): the gap between two
+  // steps was longer than a frame timeout.
+  uint64_t freezes() const { return freezes_; }
 
  private:
   void set(RunState s, const char* why) noexcept;
+  bool alive(const Health& h) const noexcept;
+  Health after_freeze(const Health& h) noexcept;
   Config::Supervisor cfg_;
   RunState state_ = RunState::kStarting;
   const char* reason_ = "starting";
   int64_t degraded_since_ns_ = 0;
   uint64_t output_errors_seen_ = 0;
+  int64_t last_step_ns_ = 0;
+  int64_t resumed_ns_ = 0;  // when the last freeze ended; 0 = none
+  uint64_t freezes_ = 0;
+  bool alive_ = true;
 };
 
 }  // namespace aprt

@@ -15,8 +15,10 @@ inline constexpr uint32_t kPoseNoQuorum = 1u << 11;       // cameras disagree: n
 inline constexpr uint32_t kPoseSparseScan = 1u << 12;     // LiDAR: too few points (padded or empty)
 // The validity gate's (runtime/pose/pose_gate.h): the pose is withheld, the
 // system is fine.
-inline constexpr uint32_t kPoseUncertain = 1u << 13;     // the model's own sigma is too large
-inline constexpr uint32_t kPoseInconsistent = 1u << 14;  // disagrees with the vehicle's motion
-inline constexpr uint32_t kPoseUnconfirmed = 1u << 15;   // no confirmed track yet
+// Bits 5..7 (free in the network output's range; CAN's 16-bit Flags keeps
+// bit 15 for a saturated signal).
+inline constexpr uint32_t kPoseUncertain = 1u << 5;     // the model's own sigma is too large
+inline constexpr uint32_t kPoseInconsistent = 1u << 6;  // disagrees with the vehicle's motion
+inline constexpr uint32_t kPoseUnconfirmed = 1u << 7;   // no confirmed track yet
 
 }  // namespace aprt

@@ -8,6 +8,7 @@
 // drive (run_replay/).
 #include <dds/dds.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -291,11 +292,34 @@ TEST(FaultInjection, PublishFailureIsReportedAndRecovers) {
 TEST(FaultInjection, HungInferenceIsAFault) {
   Config c = shipped_config();
   if (c.model.empty()) GTEST_SKIP() << "no shipped model";
-  c.fault_injection.push_back({FaultKind::kInferenceHang, 5, 1, 3000});
+  // 1.2 s: FAULT after 2 x 300 ms without a beat; the stage returns within
+  // the stop's 1.5 s bound, so the run ends normally with its trace (the
+  // next test has it stuck for good).
+  c.fault_injection.push_back({FaultKind::kInferenceHang, 5, 1, 1200});
   std::vector<std::string> t;
   RunStats st;
   EXPECT_EQ(run_and_trace(c, &t, &st), 3);  // FAULT: the exit code systemd restarts on
   EXPECT_GE(find_in(t, "FAULT: a stage stopped beating (hung thread)"), 0) << joined(t);
+}
+
+// A stage stuck in the kernel for good (the injected hang is one poll(2)
+// call that ignores the stop flag, like a read from a FIFO): FAULT, then the
+// process ends within the stop bound (1.5 s) with exit code 3 -- it used to
+// wait for the stuck thread forever, deaf to SIGTERM.
+TEST(FaultInjection, AStageStuckInTheKernelStillEndsTheProcess) {
+  Config c = shipped_config();
+  if (c.model.empty()) GTEST_SKIP() << "no shipped model";
+  c.fault_injection.push_back({FaultKind::kInferenceHang, 5, 1, 600000});
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        auto rt = Runtime::create(c);
+        if (!rt) std::_Exit(97);
+        (void)rt.value()->run();
+        std::_Exit(98);  // run() must not return while a stage is stuck
+      },
+      ::testing::ExitedWithCode(3),
+      "state FAULT \\(stage aprt-infer did not stop within 1.5 s: blocked in a system call\\?\\)");
 }
 
 std::string temp_dir() {
@@ -323,9 +347,9 @@ TEST(RunLoop, ReloadKeepsTheRunningModelOnABadFileAndSwitchesToAGoodOne) {
   ASSERT_TRUE(copy_file(good, c.model));
   c.source.replay.rate_hz = 40;
   c.source.replay.loop = true;
-  // 6 s: the good file is asked for at 1.2 s, and under ThreadSanitizer its
+  // 8 s: the good file is asked for at 1.8 s, and under ThreadSanitizer its
   // load and the switch at the next frame once missed the end of a 3 s replay.
-  c.source.replay.frames = 240;
+  c.source.replay.frames = 320;
   c.supervisor.rate_hz = 100;
   auto rt = Runtime::create(c);
   ASSERT_TRUE(rt) << rt.error().message();
@@ -335,14 +359,21 @@ TEST(RunLoop, ReloadKeepsTheRunningModelOnABadFileAndSwitchesToAGoodOne) {
   ASSERT_TRUE(copy_file(good, c.model, 100000));  // truncated: checksums fail
   r.request_reload();
   dds_sleepfor(DDS_MSECS(600));
+  // A FIFO at the model path: refused at once (it used to block the
+  // supervisor, and with it the watchdog, until a writer came).
+  std::remove(c.model.c_str());
+  ASSERT_EQ(mkfifo(c.model.c_str(), 0600), 0);
+  r.request_reload();
+  dds_sleepfor(DDS_MSECS(600));
+  std::remove(c.model.c_str());
   ASSERT_TRUE(copy_file(good, c.model));
   r.request_reload();
   runner.join();
-  EXPECT_EQ(r.stats().reloads_refused, 1u);
+  EXPECT_EQ(r.stats().reloads_refused, 2u);
   EXPECT_EQ(r.stats().reloads, 1u);
   // Every frame ran or was superseded by a newer one in the slot (a loaded
   // machine); none was lost to the switch itself.
-  EXPECT_EQ(r.stats().poses + r.stats().frames_dropped, 240u);
+  EXPECT_EQ(r.stats().poses + r.stats().frames_dropped, 320u);
   EXPECT_GT(r.stats().poses, 60u);
   std::remove(c.model.c_str());
   rmdir(dir.c_str());

@@ -129,8 +129,10 @@ std::vector<uint8_t> ModelBuilder::build() const {
   }
   meta_record(meta, 11, 1, shape, 16);
   std::vector<float> mean(shape[3], 0.5f), stdev(shape[3], 0.25f);
+  if (!norm_std.empty()) stdev = norm_std;
+  if (norm_std_first) meta_record(meta, 13, 2, stdev.data(), uint32_t(stdev.size() * 4));
   meta_record(meta, 12, 2, mean.data(), uint32_t(mean.size() * 4));
-  meta_record(meta, 13, 2, stdev.data(), uint32_t(stdev.size() * 4));
+  if (!norm_std_first) meta_record(meta, 13, 2, stdev.data(), uint32_t(stdev.size() * 4));
   meta_record(meta, 20, 2, pose_min.data(), uint32_t(pose_min.size() * 4));
   meta_record(meta, 21, 2, pose_max.data(), uint32_t(pose_max.size() * 4));
   if (!bev.empty()) meta_record(meta, 50, 2, bev.data(), uint32_t(bev.size() * 4));

@@ -48,6 +48,8 @@ class ModelBuilder {
   std::vector<float> points;  // META 'points' (crop radius, coordinate scale) when not empty
   std::vector<float> uncertainty;  // META 'uncertainty' (position, rotation scales) when not empty
   std::vector<float> pose_min{0, 0, 0}, pose_max{10, 20, 5};
+  std::vector<float> norm_std;  // META 'norm_std' when not empty (else 0.25 per channel)
+  bool norm_std_first = false;  // write norm_std before norm_mean
   uint32_t d_model = 16, nheads = 2, enc_layers = 1, dec_layers = 1;
   uint16_t version_major = format::kVersionMajor;
   bool with_producer = true;

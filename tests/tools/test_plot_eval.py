@@ -16,7 +16,7 @@ def write_csv(path, n=40, offset=0.5):
         for i in range(n):
             gx, gy = 10.0 + i, 5.0 + 0.1 * i * i
             f.write(f"images/{i:06d}.png,{gx + offset},{gy},1.5,1,0,0,0,{gx},{gy},1.5,1,0,0,0,"
-                    f"{offset},{0.1 * (i % 5)},0\n")
+                    f"{offset},{0.1 * (i % 5)},{0 if i % 7 else 16384}\n")
 
 
 class PlotEval(unittest.TestCase):
@@ -31,8 +31,11 @@ class PlotEval(unittest.TestCase):
         write_csv(self.path("fp32.csv"))
         write_csv(self.path("int8.csv"), offset=0.7)
         plot_eval([self.path("fp32.csv")], self.path("one.png"))
+        with open(self.path("dataset.json"), "w") as f:
+            f.write('{"generator": "aprt_synth", "town_extent_m": 200.0, '
+                    '"street_spacing_m": 50.0, "road_width_m": 10.0}')
         plot_eval([self.path("fp32.csv"), self.path("int8.csv")], self.path("two.png"),
-                  labels=["fp32", "int8"], title="demo")
+                  labels=["fp32", "int8"], title="demo", dataset=self.path("dataset.json"))
         for name in ("one.png", "two.png"):
             with open(self.path(name), "rb") as f:
                 self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")

@@ -47,7 +47,7 @@ const OpNode& attention_node(const Engine& e) {
 TEST(Bf16AttentionOp, PicksTheBf16KernelWhereTheCpuHasOne) {
   const auto b = bf16_model();
   auto e = load(b, "avx512");
-  if (!e && e.error().code() == Errc::kUnsupported) GTEST_SKIP() << "no AVX-512 here";
+  if (!e && e.error().code() == Errc::kIsaUnavailable) GTEST_SKIP() << "no AVX-512 here";
   ASSERT_TRUE(e) << e.error().message();
   const std::string kernel = attention_node(**e).kernel;
   EXPECT_EQ(kernel, kernels::cpu_features().avx512_bf16 ? "avx512bf16" : "avx512");
@@ -71,7 +71,7 @@ TEST(Bf16AttentionOp, EveryIsaMatchesTheBf16Reference) {
   int checked = 0;
   for (const char* isa : {"avx512", "avx2", "neon"}) {
     auto e = load(b, isa);
-    if (!e && e.error().code() == Errc::kUnsupported) continue;  // not this CPU / build
+    if (!e && e.error().code() == Errc::kIsaUnavailable) continue;  // not this CPU / build
     ASSERT_TRUE(e) << e.error().message();
     const auto got = run_once(**e);
     for (int i = 0; i < 7; ++i)
@@ -104,7 +104,7 @@ TEST(Bf16AttentionOp, PreparationInRowTasksGivesOneThreadsBits) {
             : bf16_model();
     for (const char* isa : {"avx2", "neon"}) {
       auto one = load(b, isa, 1), two = load(b, isa, 2);
-      if (!one && one.error().code() == Errc::kUnsupported) continue;  // not this CPU / build
+      if (!one && one.error().code() == Errc::kIsaUnavailable) continue;  // not this CPU / build
       ASSERT_TRUE(one && two) << isa;
       const auto a = run_once(**one);
       const auto c = run_once(**two);

@@ -1,16 +1,18 @@
 #include "runtime/config/config.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
+#include <cstdio>
 #include <cstring>
 #include <string>
 
 namespace aprt {
 namespace {
 
-void expect_refused(const char* yaml, const char* fragment) {
+void expect_refused(const std::string& yaml, const char* fragment) {
   auto c = parse_config(yaml, "test.yaml");
-  ASSERT_FALSE(c) << "accepted:\n" << yaml;
+  ASSERT_FALSE(c) << "accepted:\n" << yaml.substr(0, 400);
   EXPECT_NE(std::strstr(c.error().message(), fragment), nullptr) << c.error().message();
 }
 
@@ -283,6 +285,51 @@ TEST(Config, RefusesWithKeyPathAndLine) {
   expect_refused("model: m\n", "source.replay.path is required");
   expect_refused("model: [unclosed\n", "YAML syntax error");
   expect_refused("- a\n- b\n", "must be a mapping");
+}
+
+// The hostile configurations of docs/hostile_input.md, each refused with its
+// reason (a stack overflow, an endless read, minutes of work, or a silently
+// wrong value before).
+TEST(Config, HostileConfigurationsAreRefused) {
+  const std::string base = "model: m\nsource: {replay: {path: d}}\n";
+  expect_refused(base + "x: " + std::string(10000, '[') + "\n", "nesting deeper than 32 levels");
+  expect_refused(base + "output: {frame_id: !!str 1}\n" + "sanity: {max_jump_m: !!str 5}\n",
+                 "sanity.max_jump_m: expected a number");  // a string, never a number
+  expect_refused(base + "output: {frame_id: !custom map}\n", "YAML tags are not supported");
+  expect_refused("model: m\nsource: {replay: {path: d, rate_hz: 0x10}}\n",
+                 "expected a number in [0, 1000], got '0x10'");
+  expect_refused(base + "sanity: {max_jump_m: nan}\n", "got 'nan'");
+  expect_refused(base + "engine: {cpus: [1023]}\n", "engine.cpus[0]: expected an integer in [0,");
+  expect_refused(base + "threads: {capture: {cpu: 4096}}\n", "threads.capture.cpu");
+  expect_refused(base + "output: {frame_id: \"\"}\n", "output.frame_id: must not be empty");
+  // Many keys: the duplicate check is constant time per key (it was quadratic).
+  std::string many = base + "extra:\n";
+  for (int i = 0; i < 50000; ++i) many += "  k" + std::to_string(i) + ": 1\n";
+  many += "  k7: 2\n";
+  expect_refused(many, "key 'k7' appears twice");
+}
+
+TEST(Config, FilesThatAreNotFilesAreRefused) {
+  auto zero = load_config("/dev/zero");
+  ASSERT_FALSE(zero);
+  EXPECT_NE(std::string(zero.error().message()).find("a character device"), std::string::npos)
+      << zero.error().message();
+  const std::string fifo = ::testing::TempDir() + "config.fifo";
+  std::remove(fifo.c_str());
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  auto f = load_config(fifo);  // returns at once: the FIFO is not read
+  ASSERT_FALSE(f);
+  EXPECT_NE(std::string(f.error().message()).find("a FIFO"), std::string::npos);
+  const std::string big = ::testing::TempDir() + "big.yaml";
+  std::FILE* b = std::fopen(big.c_str(), "w");
+  ASSERT_NE(b, nullptr);
+  std::fseek(b, 2 << 20, SEEK_SET);
+  std::fputc('\n', b);
+  std::fclose(b);
+  auto large = load_config(big);
+  ASSERT_FALSE(large);
+  EXPECT_NE(std::string(large.error().message()).find("more than the 1048576"), std::string::npos)
+      << large.error().message();
 }
 
 }  // namespace

@@ -4,6 +4,8 @@
 // files that lie about themselves refused with the reason; labelled sequences
 // (lidar_poses.txt naming scans).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -136,6 +138,50 @@ TEST(LidarScan, PcdThatCannotBeRead) {
   ASSERT_FALSE(s);
   EXPECT_NE(std::strstr(s.error().message(), "neither .bin"), nullptr);
   EXPECT_FALSE(f.reader->read("/nonexistent/scan.bin", f.region, f.cloud.get()));
+}
+
+// The hostile files of docs/hostile_input.md, each refused with its reason
+// (they crashed, read garbage or hung before): an overflowing COUNT, a
+// binary PCD whose header claims more than the file holds, more than 16
+// fields, a scan that is /dev/zero or a FIFO.
+Status read_pcd(Fixture& f, const std::string& text) {
+  const std::string p = temp("hostile.pcd");
+  std::ofstream(p, std::ios::binary) << text;
+  return f.reader->read(p.c_str(), f.region, f.cloud.get());
+}
+
+void expect_refused(const Status& s, const char* why) {
+  ASSERT_FALSE(s) << why;
+  EXPECT_NE(std::strstr(s.error().message(), why), nullptr) << s.error().message();
+}
+
+TEST(LidarScan, HostileFilesAreRefusedWithTheirReason) {
+  Fixture f;
+  // 111 bytes: 4 * 2147483645 overflowed an int (a crash, UBSan: signed overflow).
+  expect_refused(read_pcd(f,
+                          "FIELDS x y z i\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 2147483645 1\n"
+                          "POINTS 1\nDATA binary\n0123456789abcdef"),
+                 "not a whole number in range");
+  // Read garbage and "succeeded" before.
+  expect_refused(read_pcd(f,
+                          "FIELDS x y z i\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1000\n"
+                          "POINTS 5\nDATA binary\n0123456789abcdef"),
+                 "the file holds");
+  std::string fields = "FIELDS x y z", sizes = "SIZE 4 4 4", types = "TYPE F F F";
+  for (int i = 0; i < 14; ++i) fields += " a", sizes += " 4", types += " F";
+  expect_refused(read_pcd(f, fields + "\n" + sizes + "\n" + types + "\nPOINTS 0\nDATA ascii\n"),
+                 "more than 16 fields");
+  expect_refused(read_pcd(f, "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS 1x\nDATA ascii\n"),
+                 "not a whole number");
+  // A KITTI scan that is a character device (read forever before).
+  const std::string zero = temp("zero.bin");
+  std::remove(zero.c_str());
+  ASSERT_EQ(symlink("/dev/zero", zero.c_str()), 0);
+  expect_refused(f.reader->read(zero.c_str(), f.region, f.cloud.get()), "a character device");
+  const std::string fifo = temp("fifo.bin");
+  std::remove(fifo.c_str());
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  expect_refused(f.reader->read(fifo.c_str(), f.region, f.cloud.get()), "a FIFO");
 }
 
 TEST(LidarSequence, ReadsPosesAndScansAndNamesBadOnes) {

@@ -105,6 +105,63 @@ TEST(ModelFile, RefusesTrailingBytesAndWrongEndianness) {
   expect_error(t, Errc::kBadHeader, "endianness");
 }
 
+// Flags and reserved fields must be 0 (FORMAT.md), each place its own message.
+TEST(ModelFile, RefusesNonZeroReservedFields) {
+  const auto b = test::make_small_model();
+  auto poke = [&](size_t at, Errc code, const char* fragment) {
+    auto t = b;
+    t[at] ^= 0x01;
+    test::fix_checksums(t);
+    expect_error(t, code, fragment);
+  };
+  poke(32, Errc::kBadHeader, "header flags or reserved bytes are not 0");
+  poke(63, Errc::kBadHeader, "header flags or reserved bytes are not 0");
+  poke(64 + 4, Errc::kBadHeader, "flags or reserved field not 0");   // section 0 flags
+  poke(64 + 28, Errc::kBadHeader, "flags or reserved field not 0");  // section 0 reserved
+  const auto secs = test::sections_of(b);
+  for (const auto& s : secs) {
+    if (s.tag != format::kSecTensors) continue;
+    poke(s.offset + 8, Errc::kBadHeader, "tensor table header: reserved words not 0");
+    poke(s.offset + 16 + 7, Errc::kBadTensor, "tensor 0 'input': flags or reserved bytes not 0");
+    poke(s.offset + 16 + 63, Errc::kBadTensor, "flags or reserved bytes not 0");
+  }
+}
+
+// Metadata that parsed before and must not: norm_std first with a length of
+// its own (the length check only ran when norm_mean came first), and pose
+// bounds so wide that any decoded pose passed the bounds test as valid.
+TEST(ModelFile, RefusesImplausibleMetadata) {
+  expect_error(test::make_small_model([](ModelBuilder& m) {
+                 m.norm_std = {0.229f};
+                 m.norm_std_first = true;
+               }),
+               Errc::kBadMetadata, "3 norm_mean values but 1 norm_std values");
+  expect_error(test::make_small_model([](ModelBuilder& m) {
+                 m.norm_std = {0.2f, 0.2f};
+               }),
+               Errc::kBadMetadata, "3 norm_mean values but 2 norm_std values");
+  expect_error(test::make_small_model([](ModelBuilder& m) {
+                 m.norm_std = {0.2f, 0.0f, 0.2f};
+                 m.norm_std_first = true;
+               }),
+               Errc::kBadMetadata, "norm_std[1] = 0 must be positive");
+  expect_error(test::make_small_model([](ModelBuilder& m) {
+                 m.pose_min = {-3e38f, 0, 0};
+                 m.pose_max = {3e38f, 20, 5};
+               }),
+               Errc::kBadMetadata, "pose bounds axis 0 [-3e+38, 3e+38] m");
+  expect_error(test::make_small_model([](ModelBuilder& m) {
+                 m.pose_min = {0, -1e6f, 0};
+                 m.pose_max = {10, 1e6f, 5};
+               }),
+               Errc::kBadMetadata, "an extent at most 1e+06 m");
+  EXPECT_TRUE(parse(test::make_small_model([](ModelBuilder& m) {
+    m.pose_min = {4.5e5f, 5.4e6f, 0};  // UTM coordinates
+    m.pose_max = {4.6e5f, 5.5e6f, 100};
+    m.norm_std_first = true;
+  })));
+}
+
 TEST(ModelFile, RefusesSectionTableDefects) {
   const auto b = test::make_small_model();
   const auto secs = test::sections_of(b);

@@ -39,7 +39,7 @@ TEST(Supervisor, StartsThenRuns) {
 
 TEST(Supervisor, StaleFramesDegradeThenRecover) {
   Supervisor s(cfg());
-  EXPECT_EQ(s.step(healthy(kMs * 1000)), RunState::kRunning);
+  EXPECT_EQ(s.step(healthy(kMs * 1990)), RunState::kRunning);
   Health h = healthy(kMs * 2000);
   h.last_frame_ns = kMs * 1000;  // 1 s old
   EXPECT_EQ(s.step(h), RunState::kDegraded);
@@ -86,9 +86,12 @@ TEST(Supervisor, LongDegradationBecomesFault) {
   Health h = healthy(kMs * 1000);
   h.last_flags = kPoseOutOfBounds;
   EXPECT_EQ(s.step(h), RunState::kDegraded);
-  h = healthy(kMs * 4000);
-  h.last_flags = kPoseOutOfBounds;
-  EXPECT_EQ(s.step(h), RunState::kFault);
+  for (int64_t t = 1020; t <= 4000; t += 20) {  // the supervisor's ticks
+    h = healthy(kMs * t);
+    h.last_flags = kPoseOutOfBounds;
+    s.step(h);
+  }
+  EXPECT_EQ(s.state(), RunState::kFault);
   EXPECT_EQ(s.step(healthy(kMs * 5000)), RunState::kFault);  // terminal
 }
 
@@ -96,8 +99,41 @@ TEST(Supervisor, HungStageIsFaultAndStopsThePetting) {
   Supervisor s(cfg());
   Health h = healthy(kMs * 5000);
   h.inference_beat_ns = kMs * 3000;  // 2 s without a beat: hung
-  EXPECT_FALSE(s.stages_alive(h));
   EXPECT_EQ(s.step(h), RunState::kFault);
+  EXPECT_FALSE(s.stages_alive());
+}
+
+// SIGSTOP for 3 s, then SIGCONT: every beat and the newest frame are 3 s old
+// at the next tick, the supervisor's own tick included. That is the whole
+// process standing still, not a hung stage: no FAULT, no degradation.
+TEST(Supervisor, AWholeProcessFreezeIsNotAHungStage) {
+  Supervisor s(cfg());
+  EXPECT_EQ(s.step(healthy(kMs * 1000)), RunState::kRunning);
+  Health h = healthy(kMs * 4000);
+  h.capture_beat_ns = h.inference_beat_ns = h.publish_beat_ns = kMs * 999;
+  h.last_frame_ns = kMs * 990;
+  h.last_flags = kPoseDeadlineMissed | kPoseStaleFrame;  // the pose in flight during the freeze
+  EXPECT_EQ(s.step(h), RunState::kRunning) << s.reason();
+  EXPECT_TRUE(s.stages_alive());
+  EXPECT_EQ(s.freezes(), 1u);
+  EXPECT_EQ(s.step(healthy(kMs * 4020)), RunState::kRunning);  // the stages beat again
+}
+
+// After a freeze a stage that still does not beat is hung all the same, two
+// frame timeouts later.
+TEST(Supervisor, AStageStillSilentAfterAFreezeIsHung) {
+  Supervisor s(cfg());
+  s.step(healthy(kMs * 1000));
+  for (int64_t t = 4000; t <= 5200; t += 20) {
+    Health h = healthy(kMs * t);
+    h.inference_beat_ns = kMs * 999;  // never again
+    s.step(h);
+    if (t < 4000 + 2 * 500) {
+      EXPECT_EQ(s.state(), RunState::kRunning) << t;
+    }
+  }
+  EXPECT_EQ(s.state(), RunState::kFault);
+  EXPECT_STREQ(s.reason(), "a stage stopped beating (hung thread)");
 }
 
 TEST(Supervisor, EndOfStreamStops) {

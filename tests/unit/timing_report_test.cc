@@ -40,7 +40,7 @@ TEST(TimingReport, WritesJsonAndCsv) {
   std::vector<TimingRecord> t;
   for (int i = 0; i < 100; ++i) {
     const int64_t c = int64_t(i) * 100000000;  // 10 Hz
-    t.push_back({c, c + 1000000, c + 21000000, c + 22000000 + (i == 99 ? 30000000 : 0)});
+    t.push_back({c, c + 1000000, c + 21000000, c + 22000000 + (i == 99 ? 30000000 : 0), 0});
   }
   RunStats st;
   st.frames_captured = st.poses = 100;
@@ -75,7 +75,7 @@ TEST(TimingReport, WritesJsonAndCsv) {
 }
 
 TEST(TimingReport, UnwritablePathIsAnError) {
-  TimingRecord t{0, 1, 2, 3};
+  TimingRecord t{0, 1, 2, 3, 0};
   RunStats st;
   TimingContext ctx;
   auto s = write_timing_report("/nonexistent-dir/r.json", &t, 1, st, ctx);

@@ -2,10 +2,12 @@
 // vivid scenario streams from a real driver): refusals with reasons, and a
 // missing device retried with back-off without ever blocking past the timeout.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 #include <vector>
 
 // jpeglib.h needs FILE and size_t declared first.
@@ -14,6 +16,7 @@
 #include "drivers/codec/image_decoder.h"
 #include "drivers/input/camera/v4l2_devices.h"
 #include "drivers/input/camera/v4l2_source.h"
+#include "drivers/input/replay/deeploc_replay.h"
 
 namespace aprt {
 namespace {
@@ -157,6 +160,41 @@ TEST(Mjpeg, DecodesFromMemoryAndRefusesDamage) {
   ASSERT_FALSE(small);
   // The decoder is usable after every failure.
   EXPECT_TRUE(d.value()->decode_jpeg_memory(jpg.data(), jpg.size(), out.data(), out.size(), "f5"));
+}
+
+// A replay's first frame sizes the frame slot. A 600-byte JPEG whose header
+// claims 16000x16000 took 2.3 GB there, and every real frame after it was
+// skipped (0 poses, exit 0): refused at open now, with the reason.
+TEST(Replay, AFirstFrameClaimingAHugeSizeIsRefused) {
+  char dir[] = "/tmp/aprt_replay_XXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  std::vector<uint8_t> jpeg = encode_jpeg(16, 16);
+  bool patched = false;  // SOF0: FF C0, length, precision, height, width
+  for (size_t i = 0; i + 9 < jpeg.size() && !patched; ++i) {
+    if (jpeg[i] == 0xFF && jpeg[i + 1] == 0xC0) {
+      jpeg[i + 5] = 0x3E, jpeg[i + 6] = 0x80;  // 16000
+      jpeg[i + 7] = 0x3E, jpeg[i + 8] = 0x80;
+      patched = true;
+    }
+  }
+  ASSERT_TRUE(patched);
+  const std::string d = dir;
+  FILE* f = std::fopen((d + "/bomb.jpg").c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  std::fwrite(jpeg.data(), 1, jpeg.size(), f);
+  std::fclose(f);
+  f = std::fopen((d + "/poses.txt").c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs("bomb.jpg 0 0 0 1 0 0 0\n", f);
+  std::fclose(f);
+  auto r = DeeplocReplay::open(dir);
+  ASSERT_FALSE(r);
+  EXPECT_NE(std::strstr(r.error().message(), "claims 16000x16000 pixels, more than the 4096x4096"),
+            nullptr)
+      << r.error().message();
+  std::remove((d + "/bomb.jpg").c_str());
+  std::remove((d + "/poses.txt").c_str());
+  rmdir(dir);
 }
 
 }  // namespace

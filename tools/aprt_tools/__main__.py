@@ -209,7 +209,8 @@ def cmd_plot_eval(a):
     from .plot_eval import EvalCsvError, plot_eval
 
     try:
-        plot_eval(a.csv, a.out, labels=a.labels.split(",") if a.labels else None, title=a.title)
+        plot_eval(a.csv, a.out, labels=a.labels.split(",") if a.labels else None, title=a.title,
+                  dataset=a.dataset)
     except (EvalCsvError, OSError) as e:
         print(f"plot-eval: {e}", file=sys.stderr)
         sys.exit(2)
@@ -362,6 +363,7 @@ def main(argv=None):
     pe.add_argument("--out", required=True, help="PNG to write")
     pe.add_argument("--labels", help="comma-separated panel titles (default: file names)")
     pe.add_argument("--title")
+    pe.add_argument("--dataset", help="a synthetic drive's dataset.json: draw the town's streets")
     pe.set_defaults(fn=cmd_plot_eval)
 
     pt = sub.add_parser("plot-timing", help="latency histogram and time series of `aprt run --timing`")

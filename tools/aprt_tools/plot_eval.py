@@ -1,11 +1,16 @@
 """Trajectory and error plots from `aprt eval --csv` files (matplotlib, no display).
 
 One CSV gives the paper-style figure: ground-truth track (x/y in metres, map
-frame) with the predicted positions over it, coloured by their error, and the
-per-frame position / orientation error below. Several CSVs (fp32 and int8,
-two models) are drawn side by side with their labels.
+frame; the start and the direction marked) with the predicted positions over
+it, coloured by their error on one colour scale for every panel, the poses the
+validity gate withheld marked with a cross, and the per-frame position /
+orientation error below; the headline gives the medians, the share of frames
+more than 10 m off, and how many went out valid. With --dataset (a synthetic
+drive's dataset.json) the town's streets are drawn beneath. Several CSVs (fp32
+and int8, two models, two drives) are drawn side by side with their labels.
 
   python3 -m aprt_tools plot-eval run.csv [int8.csv ...] --out plot.png [--labels fp32,int8]
+                                  [--dataset DRIVE/dataset.json]
 """
 
 from __future__ import annotations
@@ -32,7 +37,7 @@ def read_eval_csv(path: str) -> dict:
         raise EvalCsvError(f"{path}: missing column(s) {', '.join(missing)} "
                            "(expected the header written by `aprt eval --csv`)")
     out = {}
-    for k in REQUIRED:
+    for k in REQUIRED + (("flags",) if "flags" in rows[0] else ()):
         try:
             out[k] = np.array([float(r[k]) for r in rows])
         except ValueError as e:
@@ -42,11 +47,33 @@ def read_eval_csv(path: str) -> dict:
 
 def summary(d: dict) -> str:
     pe, oe = d["position_error_m"], d["orientation_error_deg"]
-    return (f"median {np.median(pe):.2f} m / {np.median(oe):.2f}°, "
-            f"p90 {np.percentile(pe, 90):.2f} m / {np.percentile(oe, 90):.2f}°")
+    text = (f"median {np.median(pe):.2f} m / {np.median(oe):.2f}°, "
+            f"{100 * np.mean(pe > 10):.1f} % > 10 m")
+    if "flags" in d:
+        valid = d["flags"] == 0
+        wrong = int(np.sum(valid & (pe > 10)))
+        text += f"\n{100 * np.mean(valid):.1f} % valid, {wrong} valid > 10 m"
+    return text
 
 
-def plot_eval(paths: list, out: str, labels: list | None = None, title: str | None = None) -> None:
+def town_streets(dataset: str):
+    """The synthetic town's street centre lines and road width from a drive's
+    dataset.json (aprt_synth), or None for another kind of drive."""
+    import json
+
+    with open(dataset) as f:
+        meta = json.load(f)
+    if meta.get("generator") != "aprt_synth":
+        return None
+    extent = float(meta.get("town_extent_m", 200.0))
+    spacing = float(meta.get("street_spacing_m", 50.0))
+    width = float(meta.get("road_width_m", 10.0))
+    lines = [c for c in np.arange(0.0, extent + 1e-6, spacing)]
+    return lines, extent, width
+
+
+def plot_eval(paths: list, out: str, labels: list | None = None, title: str | None = None,
+              dataset: str | None = None) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -56,16 +83,36 @@ def plot_eval(paths: list, out: str, labels: list | None = None, title: str | No
     if len(labels) != len(paths):
         raise EvalCsvError(f"{len(labels)} labels for {len(paths)} CSV files")
     runs = [read_eval_csv(p) for p in paths]
+    streets = town_streets(dataset) if dataset else None
+    # One colour scale for every panel: they compare. It saturates at the
+    # largest p90 so a few outliers do not wash it out.
+    vmax = max(1e-3, max(float(np.percentile(d["position_error_m"], 90)) for d in runs))
     n = len(runs)
     fig = plt.figure(figsize=(6.0 * n, 8.5))
     grid = fig.add_gridspec(2, n, height_ratios=(3, 1.2))
     for i, (d, label) in enumerate(zip(runs, labels)):
         ax = fig.add_subplot(grid[0, i])
+        if streets:
+            lines, extent, width = streets
+            for c in lines:
+                ax.plot([c, c], [0, extent], color="0.88", lw=width * 0.6, solid_capstyle="butt",
+                        zorder=0)
+                ax.plot([0, extent], [c, c], color="0.88", lw=width * 0.6, solid_capstyle="butt",
+                        zorder=0)
         ax.plot(d["gt_x"], d["gt_y"], color="0.2", lw=1.2, label="ground truth", zorder=1)
-        # Colour scale saturates at the p90 error so a few outliers do not wash it out.
-        vmax = max(1e-3, float(np.percentile(d["position_error_m"], 90)))
-        sc = ax.scatter(d["x"], d["y"], c=d["position_error_m"], s=7, cmap="plasma", vmin=0,
-                        vmax=vmax, label="predicted", zorder=2)
+        valid = d["flags"] == 0 if "flags" in d else np.ones(len(d["x"]), bool)
+        sc = ax.scatter(d["x"][valid], d["y"][valid], c=d["position_error_m"][valid], s=7,
+                        cmap="plasma", vmin=0, vmax=vmax, label="predicted (valid)", zorder=2)
+        if not valid.all():
+            ax.scatter(d["x"][~valid], d["y"][~valid], c=d["position_error_m"][~valid], s=14,
+                       cmap="plasma", vmin=0, vmax=vmax, marker="x", lw=0.8,
+                       label="predicted (withheld)", zorder=2)
+        ax.plot(d["gt_x"][0], d["gt_y"][0], marker="o", color="tab:green", ms=8, zorder=3,
+                label="start")
+        k = min(len(d["gt_x"]) - 1, 8)
+        if k > 0:
+            ax.annotate("", xy=(d["gt_x"][k], d["gt_y"][k]), xytext=(d["gt_x"][0], d["gt_y"][0]),
+                        arrowprops=dict(arrowstyle="->", color="tab:green", lw=2), zorder=3)
         fig.colorbar(sc, ax=ax, fraction=0.046, pad=0.03, label="position error [m]")
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel("x east [m]")

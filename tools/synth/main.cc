@@ -245,7 +245,8 @@ int run(int argc, char** argv) {
       " \"lidar_to_base_link\": {\"xyz\": [%.4f, %.4f, %.4f], \"rpy_deg\": [0, 0, 0]},\n"
       " \"view_jitter\": {\"lateral_m\": %.4f, \"height_m\": %.4f, \"pitch_deg\": %.4f, "
       "\"yaw_deg\": %.4f},\n"
-      " \"town_extent_m\": %.1f, \"lane_jitter_m\": %.4f, \"lidar\": %s, \"beams\": %d,\n"
+      " \"town_extent_m\": %.1f, \"street_spacing_m\": %.1f, \"road_width_m\": %.1f,\n"
+      " \"lane_jitter_m\": %.4f, \"lidar\": %s, \"beams\": %d,\n"
       " \"azimuths\": %d, \"lidar_range_m\": %.4f, \"lidar_noise_m\": %.4f,\n"
       " \"command\": \"aprt_synth --split %s --lighting %s --town-seed %u --route-seed %u "
       "--frames %d%s%s --spacing %g --lane-jitter %g --view-jitter %g,%g,%g,%g --width %d "
@@ -254,12 +255,12 @@ int run(int argc, char** argv) {
       o.split.c_str(), o.lighting.c_str(), o.town_seed, o.route_seed, path.size(), o.frames, maxlen,
       o.spacing, o.width, o.height, f, f, o.width / 2.0 - 0.5, o.height / 2.0 - 0.5, o.hfov_deg,
       o.cam_x, o.cam_y, o.cam_z, o.cam_pitch_deg, o.lidar_x, o.lidar_y, o.lidar_z, o.jitter_lateral,
-      o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg, town.extent, ro.lane_jitter,
-      o.lidar ? "true" : "false", o.beams, o.azimuths, o.lidar_range, o.lidar_noise,
-      o.split.c_str(), o.lighting.c_str(), o.town_seed, o.route_seed, o.frames,
-      o.max_length >= 1e9 ? "" : " --max-length ", o.max_length >= 1e9 ? "" : maxlen, o.spacing,
-      ro.lane_jitter, o.jitter_lateral, o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg,
-      o.width, o.height, o.hfov_deg, o.cam_x, o.cam_y, o.cam_z, o.cam_pitch_deg,
+      o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg, town.extent, town.block,
+      2 * town.road_half, ro.lane_jitter, o.lidar ? "true" : "false", o.beams, o.azimuths,
+      o.lidar_range, o.lidar_noise, o.split.c_str(), o.lighting.c_str(), o.town_seed, o.route_seed,
+      o.frames, o.max_length >= 1e9 ? "" : " --max-length ", o.max_length >= 1e9 ? "" : maxlen,
+      o.spacing, ro.lane_jitter, o.jitter_lateral, o.jitter_height, o.jitter_pitch_deg,
+      o.jitter_yaw_deg, o.width, o.height, o.hfov_deg, o.cam_x, o.cam_y, o.cam_z, o.cam_pitch_deg,
       o.lidar ? " --lidar" : "", o.beams, o.azimuths, o.lidar_range, o.lidar_noise, o.lidar_x,
       o.lidar_y, o.lidar_z);
   std::fclose(j);

@@ -12,17 +12,14 @@
 namespace aprt {
 namespace {
 
-// Reads up to n bytes (fewer only at the end of the file); -1 on error.
-ssize_t read_full(int fd, char* p, size_t n) {
-  size_t got = 0;
-  while (got < n) {
-    const ssize_t r = ::read(fd, p + got, n - got);
-    if (r < 0 && errno == EINTR) continue;
-    if (r < 0) return -1;
-    if (r == 0) break;
-    got += size_t(r);
-  }
-  return ssize_t(got);
+// A whole decimal integer in [lo, hi], or false.
+bool whole(const char* s, long lo, long hi, long* out) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(s, &end, 10);
+  if (end == s || *end != '\0' || errno == ERANGE || v < lo || v > hi) return false;
+  *out = v;
+  return true;
 }
 
 bool ends_with(const char* s, const char* suffix) {
@@ -90,30 +87,28 @@ ScanReader::~ScanReader() {
 
 Status ScanReader::read(const char* path, const PointRegion& region, PointCloud* out) {
   out->clear(region);
-  const int fd = open(path, O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return Error(Errc::kIo, "lidar: cannot open %s: %s", path, std::strerror(errno));
-  Status s =
-      ends_with(path, ".pcd") ? read_pcd(fd, path, out)
-      : ends_with(path, ".bin")
-          ? read_kitti(fd, path, out)
-          : Status(Error(Errc::kUnsupported, "lidar: %s: neither .bin (KITTI) nor .pcd", path));
-  close(fd);
-  return s;
+  const bool pcd = ends_with(path, ".pcd");
+  if (!pcd && !ends_with(path, ".bin")) {
+    return Error(Errc::kUnsupported, "lidar: %s: neither .bin (KITTI) nor .pcd", path);
+  }
+  // A regular file of a bounded size: a FIFO or a device at the path (a scan
+  // symlinked to /dev/zero) is refused, never read.
+  auto f = open_input_file(path, kMaxScanBytes, "lidar scan");
+  if (!f) return f.error();
+  return pcd ? read_pcd(*f, path, out) : read_kitti(*f, path, out);
 }
 
-Status ScanReader::read_kitti(int fd, const char* path, PointCloud* out) {
-  struct stat st {};
-  if (fstat(fd, &st) != 0) return Error(Errc::kIo, "lidar: %s: %s", path, std::strerror(errno));
-  if (st.st_size % 16 != 0) {
+Status ScanReader::read_kitti(const InputFile& file, const char* path, PointCloud* out) {
+  if (file.size() % 16 != 0) {
     return Error(Errc::kTruncated,
-                 "lidar: %s: %lld bytes is not a whole number of 16-byte points (truncated?)", path,
-                 static_cast<long long>(st.st_size));
+                 "lidar: %s: %llu bytes is not a whole number of 16-byte points (truncated?)", path,
+                 static_cast<unsigned long long>(file.size()));
   }
   constexpr size_t chunk = kBuffer / 16 * 16;
   for (;;) {
-    const ssize_t n = read_full(fd, buf_, chunk);
+    const long n = file.read(buf_, chunk);
     if (n < 0) return Error(Errc::kIo, "lidar: %s: %s", path, std::strerror(errno));
-    for (ssize_t i = 0; i + 16 <= n; i += 16) {
+    for (long i = 0; i + 16 <= n; i += 16) {
       float p[4];
       std::memcpy(p, buf_ + i, 16);
       out->add(p[0], p[1], p[2], p[3]);
@@ -123,15 +118,17 @@ Status ScanReader::read_kitti(int fd, const char* path, PointCloud* out) {
   return ok();
 }
 
-Status ScanReader::read_pcd(int fd, const char* path, PointCloud* out) {
+Status ScanReader::read_pcd(const InputFile& file, const char* path, PointCloud* out) {
   // The header: lines up to and including DATA, at most one buffer long.
-  const ssize_t got = read_full(fd, buf_, kBuffer);
+  const long got = file.read(buf_, kBuffer);
   if (got < 0) return Error(Errc::kIo, "lidar: %s: %s", path, std::strerror(errno));
   buf_[got] = '\0';
-  char names[16][24] = {};
-  char types[16] = {};
-  int sizes[16] = {}, counts[16] = {};
+  constexpr int kMaxFields = 16;
+  char names[kMaxFields][24] = {};
+  char types[kMaxFields] = {};
+  long sizes[kMaxFields] = {}, counts[kMaxFields] = {};
   int nfields = 0, ntypes = 0, nsizes = 0, ncounts = 0;
+  bool too_many = false, bad_number = false;
   long points = -1;
   bool ascii = false, have_data = false;
   size_t pos = 0;
@@ -151,23 +148,27 @@ Status ScanReader::read_pcd(int fd, const char* path, PointCloud* out) {
     };
     if (!std::strcmp(key, "FIELDS")) {
       each([&](char* t) {
-        if (nfields < 16) std::snprintf(names[nfields++], sizeof names[0], "%s", t);
+        if (nfields == kMaxFields) too_many = true;
+        if (nfields < kMaxFields) std::snprintf(names[nfields++], sizeof names[0], "%s", t);
       });
     } else if (!std::strcmp(key, "SIZE")) {
       each([&](char* t) {
-        if (nsizes < 16) sizes[nsizes++] = std::atoi(t);
+        if (nsizes == kMaxFields) too_many = true;
+        if (nsizes < kMaxFields && !whole(t, 1, 8, &sizes[nsizes++])) bad_number = true;
       });
     } else if (!std::strcmp(key, "TYPE")) {
       each([&](char* t) {
-        if (ntypes < 16) types[ntypes++] = t[0];
+        if (ntypes == kMaxFields) too_many = true;
+        if (ntypes < kMaxFields) types[ntypes++] = t[1] == '\0' ? t[0] : '?';
       });
     } else if (!std::strcmp(key, "COUNT")) {
       each([&](char* t) {
-        if (ncounts < 16) counts[ncounts++] = std::atoi(t);
+        if (ncounts == kMaxFields) too_many = true;
+        if (ncounts < kMaxFields && !whole(t, 1, kMaxCount, &counts[ncounts++])) bad_number = true;
       });
     } else if (!std::strcmp(key, "POINTS")) {
       char* t = strtok_r(nullptr, " \t\r", &save);
-      points = t ? std::atol(t) : -1;
+      if (!t || !whole(t, 0, kMaxPoints, &points)) bad_number = true;
     } else if (!std::strcmp(key, "DATA")) {
       char* t = strtok_r(nullptr, " \t\r", &save);
       if (!t || (std::strcmp(t, "ascii") && std::strcmp(t, "binary"))) {
@@ -179,38 +180,59 @@ Status ScanReader::read_pcd(int fd, const char* path, PointCloud* out) {
     }
   }
   if (!have_data) return Error(Errc::kBadHeader, "lidar: %s: PCD header without DATA", path);
+  if (too_many) {
+    return Error(Errc::kUnsupported, "lidar: %s: PCD with more than %d fields", path, kMaxFields);
+  }
+  if (bad_number) {
+    return Error(Errc::kBadHeader,
+                 "lidar: %s: PCD SIZE (1..8), COUNT (1..%ld) or POINTS (0..%ld) is not a whole "
+                 "number in range",
+                 path, kMaxCount, kMaxPoints);
+  }
   if (nfields == 0 || nsizes != nfields || ntypes != nfields || points < 0) {
     return Error(Errc::kBadHeader,
                  "lidar: %s: PCD header inconsistent (%d FIELDS, %d SIZE, %d TYPE, POINTS %ld)",
                  path, nfields, nsizes, ntypes, points);
   }
+  if (ncounts != 0 && ncounts != nfields) {
+    return Error(Errc::kBadHeader, "lidar: %s: PCD header has %d COUNT values for %d FIELDS", path,
+                 ncounts, nfields);
+  }
   Field x, y, z, in;
-  int offset = 0, column = 0;
+  size_t offset = 0, column = 0;  // bounded: 16 fields x 8 bytes x kMaxCount
   for (int i = 0; i < nfields; ++i) {
-    const int count = ncounts == nfields ? counts[i] : 1;
+    const long count = ncounts == nfields ? counts[i] : 1;
     const bool sized =
         (types[i] == 'F' && (sizes[i] == 4 || sizes[i] == 8)) ||
         ((types[i] == 'U' || types[i] == 'I') && (sizes[i] == 1 || sizes[i] == 2 || sizes[i] == 4));
     if (!sized || count < 1) {
-      return Error(Errc::kBadHeader, "lidar: %s: PCD field %s has type %c size %d count %d", path,
+      return Error(Errc::kBadHeader, "lidar: %s: PCD field %s has type %c size %ld count %ld", path,
                    names[i], types[i], sizes[i], count);
     }
-    Field f{ascii ? column : offset, types[i], sizes[i]};
+    Field f{int(ascii ? column : offset), types[i], int(sizes[i])};
     if (!std::strcmp(names[i], "x")) x = f;
     if (!std::strcmp(names[i], "y")) y = f;
     if (!std::strcmp(names[i], "z")) z = f;
     if (!std::strcmp(names[i], "intensity")) in = f;
-    offset += sizes[i] * count;
-    column += count;
+    offset += size_t(sizes[i]) * size_t(count);
+    column += size_t(count);
   }
   if (x.offset < 0 || y.offset < 0 || z.offset < 0 || x.type != 'F' || y.type != 'F' ||
       z.type != 'F') {
     return Error(Errc::kBadHeader, "lidar: %s: PCD needs float fields x, y and z", path);
   }
-  const size_t step = size_t(offset);
+  const size_t step = offset;
   if ((ascii && column > 16) || step > kBuffer / 2) {
-    return Error(Errc::kUnsupported, "lidar: %s: PCD records of %d fields / %zu bytes are too wide",
-                 path, column, step);
+    return Error(Errc::kUnsupported,
+                 "lidar: %s: PCD records of %zu values / %zu bytes are too wide", path, column,
+                 step);
+  }
+  // A binary body must hold what the header says, before any of it is read.
+  if (!ascii && uint64_t(points) * step > file.size() - pos) {
+    return Error(Errc::kTruncated,
+                 "lidar: %s: PCD says %ld points of %zu bytes, the file holds %llu bytes after its "
+                 "header (truncated?)",
+                 path, points, step, static_cast<unsigned long long>(file.size() - pos));
   }
   // The data: what is left of the buffer, then more reads; a record or line
   // split across reads is carried to the buffer's start.
@@ -261,7 +283,7 @@ Status ScanReader::read_pcd(int fd, const char* path, PointCloud* out) {
       return Error(Errc::kBadHeader, "lidar: %s: a PCD line longer than %zu bytes", path, kBuffer);
     }
     const size_t want = kBuffer - have;
-    const ssize_t n = read_full(fd, buf_ + have, want);
+    const long n = file.read(buf_ + have, want);
     if (n < 0) return Error(Errc::kIo, "lidar: %s: %s", path, std::strerror(errno));
     have += size_t(n);
     eof = size_t(n) < want;

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "drivers/input/lidar/point_cloud.h"
+#include "runtime/base/file_io.h"
 
 namespace aprt {
 
@@ -19,14 +20,19 @@ class ScanReader {
   static Expected<std::unique_ptr<ScanReader>> create();
   ~ScanReader();
 
-  // .bin or .pcd by the file's extension.
+  // A scan file is at most this large (16 M points of 16 bytes).
+  static constexpr uint64_t kMaxScanBytes = uint64_t(256) << 20;
+  // .bin or .pcd by the file's extension; a regular file (a FIFO or a device
+  // is refused) of at most kMaxScanBytes.
   Status read(const char* path, const PointRegion& region, PointCloud* out);
 
  private:
   ScanReader() = default;
-  Status read_kitti(int fd, const char* path, PointCloud* out);
-  Status read_pcd(int fd, const char* path, PointCloud* out);
+  Status read_kitti(const InputFile& file, const char* path, PointCloud* out);
+  Status read_pcd(const InputFile& file, const char* path, PointCloud* out);
   static constexpr size_t kBuffer = 1 << 16;
+  static constexpr long kMaxCount = 1024;        // values per PCD field
+  static constexpr long kMaxPoints = 100000000;  // PCD POINTS
   char* buf_ = nullptr;
 };
 

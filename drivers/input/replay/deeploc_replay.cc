@@ -1,11 +1,14 @@
 #include "drivers/input/replay/deeploc_replay.h"
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <new>
 
 #include "runtime/base/check.h"
+#include "runtime/base/file_io.h"
 
 namespace aprt {
 
@@ -18,18 +21,15 @@ Expected<std::unique_ptr<DeeplocReplay>> DeeplocReplay::open(const char* folder)
   char path[768];
   std::snprintf(path, sizeof path, "%s/poses.txt", folder);
   if (Status st = read_pose_list(path, &r->entries_); !st) return st.error();
-  // Optional recorded times.
+  // Optional recorded times: absent is fine, present must be right.
   std::snprintf(path, sizeof path, "%s/times.txt", folder);
-  if (FILE* t = std::fopen(path, "r")) {
-    size_t k = 0;
-    char name[128];
-    double sec;
-    while (k < r->entries_.size() && std::fscanf(t, "%127s %lf", name, &sec) == 2) {
-      if (std::strcmp(name, r->entries_[k].name) != 0) break;
-      r->entries_[k++].time_s = sec;
+  if (access(path, F_OK) == 0) {
+    std::string text;
+    if (Status st = read_input_file(path, kMaxPoseListBytes, "replay: times", &text); !st) {
+      return st.error();
     }
-    std::fclose(t);
-    r->has_times_ = k == r->entries_.size();
+    if (Status st = parse_times(text, path, &r->entries_); !st) return st.error();
+    r->has_times_ = true;
   }
   auto dec = ImageDecoder::create(size_t(64) << 20);
   if (!dec) return dec.error();
@@ -37,6 +37,11 @@ Expected<std::unique_ptr<DeeplocReplay>> DeeplocReplay::open(const char* folder)
   std::snprintf(path, sizeof path, "%s/%s", folder, r->entries_[0].name);
   auto first = r->decoder_->probe(path);
   if (!first) return first.error();
+  // The first frame sizes the frame slot: a header may not claim more than a
+  // frame can be (every later frame must then match it).
+  APRT_ENSURE(first->width <= kMaxReplaySide && first->height <= kMaxReplaySide, Errc::kTooLarge,
+              "replay: %s claims %dx%d pixels, more than the %dx%d a replay frame may have", path,
+              first->width, first->height, kMaxReplaySide, kMaxReplaySide);
   r->width_ = first->width;
   r->height_ = first->height;
   return r;

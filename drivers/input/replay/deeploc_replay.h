@@ -17,6 +17,9 @@
 
 namespace aprt {
 
+// The largest replay frame side (a 4096 x 4096 RGB frame: 48 MB).
+inline constexpr int kMaxReplaySide = 4096;
+
 class DeeplocReplay {
  public:
   static Expected<std::unique_ptr<DeeplocReplay>> open(const char* folder);

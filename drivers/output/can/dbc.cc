@@ -3,8 +3,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 #include <sstream>
+
+#include "runtime/base/file_io.h"
 
 namespace aprt::can {
 
@@ -172,11 +173,11 @@ Expected<Dbc> parse_dbc(const std::string& text, const std::string& origin) {
 }
 
 Expected<Dbc> load_dbc(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) return Error(Errc::kIo, "dbc: cannot open '%s'", path.c_str());
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return parse_dbc(ss.str(), path);
+  std::string text;  // a regular file of at most 4 MiB (docs/hostile_input.md)
+  if (Status s = read_input_file(path.c_str(), size_t(4) << 20, "dbc", &text); !s) {
+    return s.error();
+  }
+  return parse_dbc(text, path);
 }
 
 }  // namespace aprt::can

@@ -4,7 +4,12 @@
 . /hil/lib.sh
 /aprt/bin/aprt run --config /hil/can_paced.yaml > /tmp/run.txt 2>&1 &
 run=$!
-sleep 1
+# The interface appears once aprt has said it is missing (a fixed sleep raced
+# with the model's load, which under TCG on a busy host takes seconds).
+for i in $(seq 1 300); do
+  grep -q "interface 'vcan0' not found" /tmp/run.txt && break
+  sleep 0.1
+done
 ip link add dev vcan0 type vcan && ip link set vcan0 up
 # Frames queued in the kernel when the link goes down are lost: the receiver
 # sees a counter gap (what E2E is for), never a CRC error or a repeat.
