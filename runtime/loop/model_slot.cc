@@ -34,11 +34,7 @@ bool ModelSlot::stop_loader(int64_t deadline_ns) {
   if (!loader_started_) return true;
   stop_.store(true, std::memory_order_release);
   sem_post(&wake_);
-  const timespec until{time_t(deadline_ns / 1000000000), long(deadline_ns % 1000000000)};
-  if (deadline_ns == 0 ? pthread_tryjoin_np(loader_, nullptr) != 0
-                       : pthread_clockjoin_np(loader_, nullptr, CLOCK_MONOTONIC, &until) != 0) {
-    return false;
-  }
+  if (!join_thread_by(loader_, deadline_ns)) return false;
   loader_started_ = false;
   return true;
 }

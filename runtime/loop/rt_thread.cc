@@ -1,6 +1,7 @@
 #include "runtime/loop/rt_thread.h"
 
 #include <sched.h>
+#include <time.h>
 
 #include <cerrno>
 #include <cstdio>
@@ -42,6 +43,17 @@ Status start_thread(pthread_t* t, void* (*fn)(void*), void* arg, const ThreadCon
     }
   }
   return ok();
+}
+
+bool join_thread_by(pthread_t t, int64_t deadline_ns) {
+  for (;;) {
+    if (pthread_tryjoin_np(t, nullptr) == 0) return true;
+    timespec now{};
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    if (int64_t(now.tv_sec) * 1000000000 + now.tv_nsec >= deadline_ns) return false;
+    const timespec pause{0, 1000000};
+    nanosleep(&pause, nullptr);
+  }
 }
 
 }  // namespace aprt

@@ -79,10 +79,7 @@ Runtime::~Runtime() {
 }
 
 const char* Runtime::join_threads_by(int64_t deadline_ns) {
-  const timespec until{time_t(deadline_ns / 1000000000), long(deadline_ns % 1000000000)};
-  auto join = [&](pthread_t t) {
-    return pthread_clockjoin_np(t, nullptr, CLOCK_MONOTONIC, &until);
-  };
+  auto join = [&](pthread_t t) { return join_thread_by(t, deadline_ns) ? 0 : 1; };
   for (auto& c : channels_) {
     if (c->started && join(c->thread) != 0) return c->thread_name.c_str();
     c->started = false;

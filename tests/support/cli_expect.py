@@ -6,7 +6,7 @@ prints the expected line and then crashes passes), so command-line tests go
 through this:
 
   cli_expect.py [--code N] [--match REGEX]... [--absent REGEX]... [--fifo PATH]
-                [--timeout S] -- COMMAND ARGS...
+                [--timeout S] [--signal NAME:S] -- COMMAND ARGS...
 
 --code N      the exit code the command must end with (default 0)
 --match R     a regular expression its stdout+stderr must contain (re.S)
@@ -14,10 +14,12 @@ through this:
 --fifo PATH   make PATH a FIFO before running (hostile-input tests)
 --timeout S   fail if the command has not ended after S seconds (default 120):
               a command that hangs on hostile input is a failure, not a stuck CI
+--signal NAME:S  send signal NAME (TERM, INT, HUP) S seconds after the start
 """
 import argparse
 import os
 import re
+import signal
 import subprocess
 import sys
 
@@ -33,19 +35,31 @@ def main():
     p.add_argument("--absent", action="append", default=[])
     p.add_argument("--fifo", action="append", default=[])
     p.add_argument("--timeout", type=float, default=120)
+    p.add_argument("--signal")
     a = p.parse_args(sys.argv[1:split])
     cmd = sys.argv[split + 1:]
     for f in a.fifo:
         if os.path.lexists(f):
             os.remove(f)
         os.mkfifo(f)
+    sig, sig_after = None, None
+    if a.signal:
+        name, _, after = a.signal.partition(":")
+        sig, sig_after = signal.Signals["SIG" + name], float(after or 0)
+    r = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                         stdin=subprocess.DEVNULL)
     try:
-        r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                           stdin=subprocess.DEVNULL, timeout=a.timeout)
+        if sig is not None:
+            try:
+                r.wait(timeout=sig_after)
+            except subprocess.TimeoutExpired:
+                r.send_signal(sig)
+        stdout, _ = r.communicate(timeout=a.timeout)
     except subprocess.TimeoutExpired:
+        r.kill()
         print(f"cli_expect: {cmd[0]} did not end within {a.timeout} s", file=sys.stderr)
         return 1
-    out = r.stdout.decode(errors="replace")
+    out = stdout.decode(errors="replace")
     sys.stdout.write(out)
     ok = True
     if r.returncode != a.code:
