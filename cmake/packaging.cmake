@@ -25,7 +25,7 @@ set(APRT_INSTALL_DATADIR ${CMAKE_INSTALL_DATADIR}/aprt)
 set(APRT_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/aprt)
 
 install(TARGETS aprt RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime)
-install(FILES config/default.yaml config/aprt_pose.dbc config/aprt.service
+install(FILES config/default.yaml config/autoware.yaml config/aprt_pose.dbc config/aprt.service
         DESTINATION ${APRT_INSTALL_DATADIR}/config COMPONENT runtime)
 install(DIRECTORY config/idl DESTINATION ${APRT_INSTALL_DATADIR}/config COMPONENT runtime)
 install(DIRECTORY model_bin/ DESTINATION ${APRT_INSTALL_DATADIR}/model_bin COMPONENT runtime

@@ -38,7 +38,8 @@ fi
 dpkg-deb -I "$deb" conffiles | grep -qx /etc/aprt/aprt.yaml || fail "$deb: /etc/aprt/aprt.yaml is not a conffile"
 contents=$(dpkg-deb -c "$deb"; dpkg-deb -c "$dev")
 for path in ./usr/bin/aprt ./etc/aprt/aprt.yaml ./usr/lib/systemd/system/aprt.service \
-  ./usr/share/aprt/config/default.yaml ./usr/share/aprt/config/aprt_pose.dbc \
+  ./usr/share/aprt/config/default.yaml ./usr/share/aprt/config/autoware.yaml \
+  ./usr/share/aprt/config/aprt_pose.dbc \
   ./usr/share/aprt/config/idl/ros2_interfaces.idl ./usr/share/aprt/model_bin/town_64.aprt \
   ./usr/share/aprt/data/demo_drive/poses.txt ./usr/include/aprt/runtime/engine/engine.h \
   ./usr/share/doc/aprt/README.md; do
@@ -59,6 +60,8 @@ aprt=("${run[@]}" "$root/usr/bin/aprt")
 model=$root/usr/share/aprt/model_bin/town_64.aprt
 echo "== aprt run --check (the installed ECU configuration)"
 "${aprt[@]}" run --check --config "$root/etc/aprt/aprt.yaml" --model "$model"
+echo "== aprt run --check (the installed Autoware configuration, its model path relative)"
+"${aprt[@]}" run --check --config "$root/usr/share/aprt/config/autoware.yaml"
 echo "== aprt info (the shipped model)"
 "${aprt[@]}" info "$model" | head -20
 echo "== aprt run with no configuration (default from $root/usr/share/aprt)"
