@@ -1,7 +1,6 @@
 #include "runtime/engine/pose_decode.h"
 
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 
 namespace aprt {
@@ -56,24 +55,6 @@ PoseEstimate decode_pose(const float* raw, const ModelMeta& meta, float bounds_m
   const double s = (q[0] < 0.0 ? -1.0 : 1.0) / n;
   for (int i = 0; i < 4; ++i) p.orientation[i] = q[i] * s;
   return p;
-}
-
-const char* pose_flags_text(uint32_t flags, char* buf, int size) noexcept {
-  if (size <= 0) return buf;
-  if (flags == 0) {
-    std::snprintf(buf, size, "ok");
-    return buf;
-  }
-  static const char* const kNames[] = {"non-finite", "quat-degenerate", "quat-norm",
-                                       "out-of-bounds", "no-confidence"};
-  int used = 0;
-  buf[0] = '\0';
-  for (int bit = 0; bit < 5; ++bit) {
-    if (!(flags & (1u << bit))) continue;
-    used += std::snprintf(buf + used, size > used ? size - used : 0, "%s%s", used ? "," : "",
-                          kNames[bit]);
-  }
-  return buf;
 }
 
 }  // namespace aprt

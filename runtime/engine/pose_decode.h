@@ -43,7 +43,4 @@ struct PoseEstimate {
 PoseEstimate decode_pose(const float* raw, const ModelMeta& meta,
                          float bounds_margin = 0.1f) noexcept;
 
-// Short text for the flags ("ok", "non-finite,out-of-bounds", ...) into `buf`.
-const char* pose_flags_text(uint32_t flags, char* buf, int size) noexcept;
-
 }  // namespace aprt

@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "drivers/output/dds/dds_publisher.h"
+#include "runtime/pose/pose_flags.h"
 
 namespace aprt {
 namespace {
@@ -128,6 +129,10 @@ void PoseOutputs::publish(const PoseRecord& r, int64_t now_ns,
       }
     } else {
       ++stats_.dds_withheld;
+      if (r.state != RunState::kRunning) ++stats_.dds_withheld_not_running;
+      for (int bit = 0; bit < 16; ++bit) {
+        if (r.flags & (1u << bit)) ++stats_.dds_withheld_flag[bit];
+      }
     }
   }
   if (can_sender_) {
@@ -244,12 +249,33 @@ void PoseOutputs::publish_status(const StatusSnapshot& s, int64_t realtime_ns) n
   }
 }
 
+void withheld_reasons(const OutputStats& st, char* buf, size_t size) {
+  buf[0] = '\0';
+  if (st.dds_withheld == 0) return;
+  size_t used = 0;
+  const auto put = [&](const char* fmt, unsigned long long n, const char* what) {
+    if (used < size) used += size_t(std::snprintf(buf + used, size - used, fmt, n, what));
+  };
+  put(" (%llu %s", st.dds_withheld_not_running, "supervisor not RUNNING");
+  const char* sep = "; ";
+  for (int bit = 0; bit < 16; ++bit) {
+    if (!st.dds_withheld_flag[bit]) continue;
+    const char* name = kPoseFlagNames[bit] ? kPoseFlagNames[bit] : "other";
+    if (used < size) used += size_t(std::snprintf(buf + used, size - used, "%s", sep));
+    put("%llu %s", st.dds_withheld_flag[bit], name);
+    sep = ", ";
+  }
+  if (used < size) std::snprintf(buf + used, size - used, ")");
+}
+
 void PoseOutputs::print_summary() const {
   if (cfg_.dds.enabled) {
     if (dds_) {
-      std::printf("dds: %llu poses published on rt%s, %llu withheld (flagged), %llu errors\n",
+      char why[512];
+      withheld_reasons(stats_, why, sizeof why);
+      std::printf("dds: %llu poses published on rt%s, %llu withheld%s, %llu errors\n",
                   static_cast<unsigned long long>(stats_.dds_poses), cfg_.dds.pose_topic.c_str(),
-                  static_cast<unsigned long long>(stats_.dds_withheld),
+                  static_cast<unsigned long long>(stats_.dds_withheld), why,
                   static_cast<unsigned long long>(stats_.dds_errors));
     } else {
       std::printf("dds: disabled (%s)\n", dds_off_reason_.c_str());

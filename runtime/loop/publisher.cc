@@ -122,18 +122,10 @@ void Publisher::run() noexcept {
 
 void Publisher::print_pose(const PoseRecord& r) const {
   char flags[160];
-  pose_flags_text(r.flags & 0x1f, flags, sizeof flags);
+  pose_flag_names(r.flags, flags, sizeof flags);
   const auto add = [&](const char* what) {
     std::strncat(flags, what, sizeof flags - std::strlen(flags) - 1);
   };
-  if (r.flags & kPoseStaleFrame) add(",stale");
-  if (r.flags & kPoseDeadlineMissed) add(",late");
-  if (r.flags & kPoseJump) add(",jump");
-  if (r.flags & kPoseNoQuorum) add(",no-quorum");
-  if (r.flags & kPoseSparseScan) add(",sparse");
-  if (r.flags & kPoseUncertain) add(",uncertain");
-  if (r.flags & kPoseInconsistent) add(",inconsistent");
-  if (r.flags & kPoseUnconfirmed) add(",unconfirmed");
   if (r.fusion.cameras > 1) {  // agreeing / configured cameras
     char cams[24];
     std::snprintf(cams, sizeof cams, " cams %u/%u", unsigned(r.fusion.inliers),

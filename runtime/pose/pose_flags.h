@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 
 namespace aprt {
 
@@ -20,5 +21,23 @@ inline constexpr uint32_t kPoseSparseScan = 1u << 12;     // LiDAR: too few poin
 inline constexpr uint32_t kPoseUncertain = 1u << 5;     // the model's own sigma is too large
 inline constexpr uint32_t kPoseInconsistent = 1u << 6;  // disagrees with the vehicle's motion
 inline constexpr uint32_t kPoseUnconfirmed = 1u << 7;   // no confirmed track yet
+
+// Each bit's name (docs/outputs.md, "Validity"), bit order; nullptr: unused.
+inline constexpr const char* kPoseFlagNames[16] = {
+    "non-finite",   "quat-degenerate", "quat-norm", "out-of-bounds", "no-confidence", "uncertain",
+    "inconsistent", "unconfirmed",     "stale",     "late",          "jump",          "no-quorum",
+    "sparse",       nullptr,           nullptr,     nullptr};
+
+// "ok" or the names of the flags set, comma-separated, into `buf`.
+inline const char* pose_flag_names(uint32_t flags, char* buf, int size) noexcept {
+  if (size <= 0) return buf;
+  int used = std::snprintf(buf, size_t(size), "%s", flags ? "" : "ok");
+  for (int bit = 0; bit < 16; ++bit) {
+    if (!(flags & (1u << bit)) || !kPoseFlagNames[bit]) continue;
+    used += std::snprintf(buf + used, used < size ? size_t(size - used) : 0, "%s%s",
+                          used ? "," : "", kPoseFlagNames[bit]);
+  }
+  return buf;
+}
 
 }  // namespace aprt

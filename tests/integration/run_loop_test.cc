@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <iterator>
@@ -253,6 +254,24 @@ TEST(FaultInjection, InferenceOverrunFlagsLatePosesAndRecovers) {
   EXPECT_GE(find_in(t, "RUNNING: ok", d), 0) << joined(t);
 }
 
+// The summary's breakdown: the supervisor's share first, then each flag.
+TEST(RunLoop, WithheldPosesAreCountedByReason) {
+  OutputStats st;
+  char why[512];
+  withheld_reasons(st, why, sizeof why);
+  EXPECT_STREQ(why, "");
+  st.dds_withheld = 40;
+  st.dds_withheld_not_running = 12;
+  st.dds_withheld_flag[7] = 30;  // unconfirmed
+  st.dds_withheld_flag[5] = 4;   // uncertain
+  st.dds_withheld_flag[14] = 1;  // no name: "other"
+  withheld_reasons(st, why, sizeof why);
+  EXPECT_STREQ(why, " (12 supervisor not RUNNING; 4 uncertain, 30 unconfirmed, 1 other)");
+  char tiny[16];
+  withheld_reasons(st, tiny, sizeof tiny);  // truncated, terminated
+  EXPECT_EQ(std::strlen(tiny), sizeof tiny - 1);
+}
+
 TEST(FaultInjection, NanOutputIsFlaggedWithheldAndRecovers) {
   Config c = shipped_config();
   if (c.model.empty()) GTEST_SKIP() << "no shipped model";
@@ -267,8 +286,13 @@ TEST(FaultInjection, NanOutputIsFlaggedWithheldAndRecovers) {
   OutputStats o;
   EXPECT_EQ(run_and_trace(c, &t, &st, &o), 0);
   EXPECT_GE(st.poses_flagged, 4u);
-  EXPECT_GE(o.dds_withheld, 4u);  // never published as valid
-  EXPECT_GT(o.dds_poses, 0u);     // the shipped model's valid poses go out (fewer under ASan)
+  EXPECT_GE(o.dds_withheld, 4u);          // never published as valid
+  EXPECT_GE(o.dds_withheld_flag[0], 4u);  // counted as non-finite
+  EXPECT_GT(o.dds_poses, 0u);  // the shipped model's valid poses go out (fewer under ASan)
+  char why[512];
+  withheld_reasons(o, why, sizeof why);  // the summary names every reason
+  EXPECT_NE(std::string(why).find(" non-finite"), std::string::npos) << why;
+  EXPECT_NE(std::string(why).find(" supervisor not RUNNING"), std::string::npos) << why;
   EXPECT_EQ(o.dds_errors, 0u);
   const int d = find_in(t, "DEGRADED: network output not sane");
   EXPECT_GE(d, 0) << joined(t);

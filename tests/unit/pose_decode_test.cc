@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include "runtime/pose/pose_flags.h"
+
 namespace aprt {
 namespace {
 
@@ -51,8 +53,13 @@ TEST(PoseDecode, FlagsWhatCannotBeTrusted) {
   const float small_q[7] = {0.5f, 0.5f, 0.5f, 0.1f, 0, 0, 0};
   EXPECT_TRUE(decode_pose(small_q, meta()).flags & kPoseQuatNorm);
   char text[64];
-  EXPECT_STREQ(pose_flags_text(kPoseNonFinite | kPoseOutOfBounds, text, sizeof text),
+  EXPECT_STREQ(pose_flag_names(kPoseNonFinite | kPoseOutOfBounds, text, sizeof text),
                "non-finite,out-of-bounds");
+  EXPECT_STREQ(pose_flag_names(0, text, sizeof text), "ok");
+  EXPECT_STREQ(pose_flag_names(kPoseUnconfirmed | kPoseStaleFrame, text, sizeof text),
+               "unconfirmed,stale");
+  char tiny[8];  // truncated, never overrun
+  EXPECT_STREQ(pose_flag_names(kPoseNonFinite | kPoseJump, tiny, sizeof tiny), "non-fin");
 }
 
 // Outputs 7..12 of a model with confidence (FORMAT.md 1.3): sigma = scale *
