@@ -355,13 +355,14 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(r.integer(tr, tp, "lost_after", 1, 100000, &t.lost_after));
 
     const Node* th = root->get("threads");
-    APRT_TRY(
-        r.map(th, "threads", {"capture", "inference", "publish", "supervisor", "lock_memory"}));
+    APRT_TRY(r.map(th, "threads",
+                   {"capture", "inference", "publish", "supervisor", "lock_memory", "stack_kib"}));
     APRT_TRY(read_thread(r, th, "capture", &c.threads.capture));
     APRT_TRY(read_thread(r, th, "inference", &c.threads.inference));
     APRT_TRY(read_thread(r, th, "publish", &c.threads.publish));
     APRT_TRY(read_thread(r, th, "supervisor", &c.threads.supervisor));
     APRT_TRY(r.boolean(th, "threads", "lock_memory", &c.threads.lock_memory));
+    APRT_TRY(r.integer(th, "threads", "stack_kib", 128, 65536, &c.threads.stack_kib));
   } else if (root && root->kind != Node::kNull) {
     return Error(Errc::kInvalidArgument, "%s:%d: the document must be a mapping", origin.c_str(),
                  root->line);

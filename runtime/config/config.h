@@ -179,6 +179,7 @@ struct Config {
   struct Threads {
     ThreadConfig capture, inference, publish, supervisor;
     bool lock_memory = true;  // mlockall
+    int stack_kib = 512;      // every thread's stack, ours and the DDS library's
   } threads;
 };
 

@@ -10,9 +10,10 @@
 namespace aprt {
 
 Status start_thread(pthread_t* t, void* (*fn)(void*), void* arg, const ThreadConfig& tc,
-                    const char* name) {
+                    const char* name, size_t stack_bytes) {
   pthread_attr_t attr;
   pthread_attr_init(&attr);
+  if (stack_bytes > 0) pthread_attr_setstacksize(&attr, stack_bytes);
   if (tc.priority > 0) {
     sched_param sp{};
     sp.sched_priority = tc.priority;

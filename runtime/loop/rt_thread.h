@@ -12,8 +12,9 @@
 
 namespace aprt {
 
+// stack_bytes: the thread's stack (0: the process default).
 Status start_thread(pthread_t* t, void* (*fn)(void*), void* arg, const ThreadConfig& tc,
-                    const char* name);
+                    const char* name, size_t stack_bytes = 0);
 
 // Joins `t` unless it is still running at `deadline_ns` (monotonic clock);
 // false then, and the thread is left as it is. Polls pthread_tryjoin_np every

@@ -13,6 +13,7 @@
 
 #include "drivers/codec/frame_sidecar.h"
 #include "runtime/loop/model_loader.h"
+#include "runtime/loop/process_memory.h"
 #include "runtime/loop/rt_thread.h"
 #include "runtime/loop/run_report.h"
 
@@ -23,6 +24,8 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
   if (!r) return Error(Errc::kOutOfMemory, "run: out of memory");
   r->config_ = config;
   const Config& c = r->config_;
+  // Before the engine's workers and the DDS library's threads start.
+  bound_process_memory(c.threads);
   std::string note;
   auto engine = load_model(model_request(c), &note);
   if (!engine) return engine.error();
@@ -263,11 +266,13 @@ int Runtime::run() {
   shared_.inference_beat = shared_.publish_beat = started_ns_;
   for (auto& c : channels_) c->beat = started_ns_;
   publisher_->set_started(started_ns_);
+  const size_t stack = thread_stack_bytes(config_.threads);
   Status s;
-  if (!(s = start_thread(&publish_, publish_main, this, config_.threads.publish, "aprt-publish")) ||
+  if (!(s = start_thread(&publish_, publish_main, this, config_.threads.publish, "aprt-publish",
+                         stack)) ||
       !(publish_started_ = true) ||
-      !(s = start_thread(&inference_, inference_main, this, config_.threads.inference,
-                         "aprt-infer")) ||
+      !(s = start_thread(&inference_, inference_main, this, config_.threads.inference, "aprt-infer",
+                         stack)) ||
       !(inference_started_ = true)) {
     std::fprintf(stderr, "aprt run: %s\n", s.error().message());
     request_stop();
@@ -279,7 +284,7 @@ int Runtime::run() {
     c->shared = &shared_;
     c->faults = &faults_;
     if (!(s = start_thread(&c->thread, capture_thread, c.get(), config_.threads.capture,
-                           c->thread_name.c_str()))) {
+                           c->thread_name.c_str(), stack))) {
       std::fprintf(stderr, "aprt run: %s\n", s.error().message());
       request_stop();
       set_fatal_handler(previous);

@@ -93,6 +93,18 @@ TEST(Config, RefusesBadOutputs) {
       "extrinsics.map_offset.rpy_deg[2]: expected a number");
 }
 
+// Every thread's stack (ours and the DDS library's): bounded both ways.
+TEST(Config, ThreadStackSize) {
+  auto c = parse_config("model: m\nsource: {replay: {path: d}}\nthreads: {stack_kib: 1024}\n", "t");
+  ASSERT_TRUE(c) << c.error().message();
+  EXPECT_EQ(c->threads.stack_kib, 1024);
+  auto d = parse_config("model: m\nsource: {replay: {path: d}}\n", "t");
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->threads.stack_kib, 512);
+  expect_refused("model: m\nsource: {replay: {path: d}}\nthreads: {stack_kib: 64}\n",
+                 "threads.stack_kib: expected an integer in [128, 65536]");
+}
+
 TEST(Config, RecordedRate) {
   auto c = parse_config("model: m\nsource: {replay: {path: d, rate_hz: recorded}}\n", "t");
   ASSERT_TRUE(c) << c.error().message();

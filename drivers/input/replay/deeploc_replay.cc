@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -11,6 +12,10 @@
 #include "runtime/base/file_io.h"
 
 namespace aprt {
+
+namespace {
+constexpr size_t kMaxReplayFileBytes = size_t(64) << 20;  // the largest frame file probed
+}  // namespace
 
 Expected<std::unique_ptr<DeeplocReplay>> DeeplocReplay::open(const char* folder) {
   std::unique_ptr<DeeplocReplay> r(new (std::nothrow) DeeplocReplay());
@@ -31,7 +36,7 @@ Expected<std::unique_ptr<DeeplocReplay>> DeeplocReplay::open(const char* folder)
     if (Status st = parse_times(text, path, &r->entries_); !st) return st.error();
     r->has_times_ = true;
   }
-  auto dec = ImageDecoder::create(size_t(64) << 20);
+  auto dec = ImageDecoder::create(kMaxReplayFileBytes);
   if (!dec) return dec.error();
   r->decoder_ = std::move(dec.value());
   std::snprintf(path, sizeof path, "%s/%s", folder, r->entries_[0].name);
@@ -44,6 +49,15 @@ Expected<std::unique_ptr<DeeplocReplay>> DeeplocReplay::open(const char* folder)
               first->width, first->height, kMaxReplaySide, kMaxReplaySide);
   r->width_ = first->width;
   r->height_ = first->height;
+  // Probed with the largest buffer; kept with one for files of this size:
+  // twice the raw RGB plus 1 MiB holds any PNG (stored blocks) or JPEG
+  // (quality 100, 4:4:4) of these dimensions. Under mlockall the 64 MiB
+  // would all be locked and resident.
+  const size_t fit = std::min(kMaxReplayFileBytes,
+                              size_t(first->width) * size_t(first->height) * 6 + (size_t(1) << 20));
+  auto sized = ImageDecoder::create(fit);
+  if (!sized) return sized.error();
+  r->decoder_ = std::move(sized.value());
   return r;
 }
 
