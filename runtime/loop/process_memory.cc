@@ -14,7 +14,7 @@ namespace aprt {
 
 size_t thread_stack_bytes(const Config::Threads& t) {
   size_t bytes = size_t(t.stack_kib) * 1024;
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
   bytes *= 4;
 #endif
   return bytes;

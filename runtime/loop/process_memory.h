@@ -13,7 +13,7 @@
 namespace aprt {
 
 // The stack every thread gets: `threads.stack_kib`, four times that under
-// AddressSanitizer (its redzones enlarge every frame).
+// AddressSanitizer or ThreadSanitizer (they enlarge every frame).
 size_t thread_stack_bytes(const Config::Threads& t);
 
 // Makes thread_stack_bytes() the default of every thread created from now on
