@@ -14,7 +14,7 @@ import numpy as np
 from aprt_tools.dataset import load_image, read_poses
 
 SYNTH = os.environ.get("APRT_SYNTH", "")
-LIGHTINGS = ("day", "overcast", "morning", "noon", "haze", "dusk")
+LIGHTINGS = ("day", "overcast", "morning", "noon", "haze", "dusk", "night")
 
 
 def read(path):
@@ -60,6 +60,10 @@ class Synth(unittest.TestCase):
         for i, a in enumerate(LIGHTINGS):
             for b in LIGHTINGS[i + 1:]:
                 self.assertGreater(np.abs(images[a] - images[b]).mean(), 3.0, f"{a} vs {b}")
+        # Night: darker than any other light, its street lights still visible.
+        for light in LIGHTINGS[:-1]:
+            self.assertLess(images["night"].mean(), images[light].mean() - 20, light)
+        self.assertGreater(images["night"].max(), 200, "no lit street light in view")
 
     def test_training_routes_cover_every_street_both_ways(self):
         synth(self.path("t"), "--split", "train", "--route-seed", "3", "--spacing", "5",

@@ -57,6 +57,16 @@ std::optional<Lighting> lighting_preset(std::string_view name) {
     L.sky_zenith = {0.7f, 0.72f, 0.75f};
     L.fog = {0.8f, 0.78f, 0.74f};
     L.fog_distance = 110.0;
+  } else if (name == "night") {  // no sun: street lights, headlights, a faint moonlit sky
+    L.sun_dir = sun_from(30, 40);
+    L.sun = {0.025f, 0.027f, 0.04f};
+    L.ambient = {0.02f, 0.022f, 0.035f};
+    L.sky_horizon = {0.06f, 0.055f, 0.08f};
+    L.sky_zenith = {0.01f, 0.012f, 0.03f};
+    L.fog = {0.05f, 0.045f, 0.05f};
+    L.fog_distance = 300.0;
+    L.lamp_intensity = 7.0;
+    L.headlight = 0.45;
   } else {
     return std::nullopt;
   }

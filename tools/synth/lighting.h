@@ -1,7 +1,8 @@
 // Named lighting conditions of the synthetic town. The training drives use
 // day, overcast, morning and noon; haze is kept for validation under a light
 // the model was not trained on; dusk is the test drive's and in no training
-// or validation set (docs/evaluation.md: the paper's split principle).
+// or validation set (docs/evaluation.md: the paper's split principle); night
+// (street lights and headlights only) is the LiDAR comparison's test light.
 #pragma once
 
 #include <optional>
@@ -14,6 +15,6 @@ namespace aprt::synth {
 // The preset of that name, or nullopt for a name that is none of kLightingNames.
 std::optional<Lighting> lighting_preset(std::string_view name);
 
-inline constexpr const char* kLightingNames = "day|overcast|morning|noon|haze|dusk";
+inline constexpr const char* kLightingNames = "day|overcast|morning|noon|haze|dusk|night";
 
 }  // namespace aprt::synth

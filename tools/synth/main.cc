@@ -2,7 +2,7 @@
 //
 //   aprt_synth --out DIR [--split train|test] [--town-seed N] [--route-seed N]
 //              [--frames N] [--width 256 --height 192 --hfov 90]
-//              [--lighting day|overcast|morning|noon|haze|dusk] [--lane-jitter M]
+//              [--lighting day|overcast|morning|noon|haze|dusk|night] [--lane-jitter M]
 //              [--camera-mount X,Y,Z,PITCH_DEG] [--view-jitter LAT,HEIGHT,PITCH,YAW]
 //              [--threads N] [--lidar] [--beams 32] [--azimuths 1024]
 //              [--lidar-range 80] [--lidar-noise 0.02] [--lidar-mount X,Y,Z]

@@ -8,6 +8,7 @@ namespace aprt::synth {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kLampReach = 30.0;  // metres a street light is taken into account
 
 double frac(double v) {
   return v - std::floor(v);
@@ -116,10 +117,41 @@ Scene::Scene(const Town& town) : town_(town) {
     const Cylinder& c = town.cylinders[k];
     add(c.cx - c.r, c.cy - c.r, c.cx + c.r, c.cy + c.r, {1, int(k)});
   }
+  lamps_.resize(grid_.size());
   for (size_t k = 0; k < town.spheres.size(); ++k) {
     const Sphere& s = town.spheres[k];
     add(s.cx - s.r, s.cy - s.r, s.cx + s.r, s.cy + s.r, {2, int(k)});
+    if (s.lamp) {
+      const int i = std::clamp(int((s.cx - origin_) / cell_), 0, cells_ - 1);
+      const int j = std::clamp(int((s.cy - origin_) / cell_), 0, cells_ - 1);
+      lamps_[size_t(j) * cells_ + i].push_back({s.cx, s.cy, s.cz});
+    }
   }
+}
+
+Color Scene::night_light(const Hit& h, Vec3 d, const Lighting& L) const {
+  double lamps = 0;
+  if (L.lamp_intensity > 0) {
+    const int reach = int(std::ceil(kLampReach / cell_));
+    const int ci = int((h.point.x - origin_) / cell_), cj = int((h.point.y - origin_) / cell_);
+    for (int j = std::max(0, cj - reach); j <= std::min(cells_ - 1, cj + reach); ++j) {
+      for (int i = std::max(0, ci - reach); i <= std::min(cells_ - 1, ci + reach); ++i) {
+        for (const Vec3& p : lamps_[size_t(j) * cells_ + i]) {
+          const Vec3 v = p - h.point;
+          const double d2 = dot(v, v);
+          if (d2 > kLampReach * kLampReach) continue;
+          const double ndl = dot(h.normal, v) / std::sqrt(d2);
+          if (ndl > 0) lamps += L.lamp_intensity * ndl / d2;
+        }
+      }
+    }
+  }
+  // Headlights: on what is ahead and below the horizon, fading with distance.
+  const double cone = std::clamp(1.0 - 8.0 * std::max(0.0, d.z + 0.03), 0.0, 1.0);
+  const double head = L.headlight * cone * std::max(0.0, -dot(h.normal, d)) /
+                      (1.0 + (h.t / 9.0) * (h.t / 9.0));
+  return {float(L.lamp.r * lamps + head), float(L.lamp.g * lamps + head),
+          float(L.lamp.b * lamps + 0.95 * head)};
 }
 
 Color Scene::surface(const Box& b, Vec3 p, Vec3 n) const {
@@ -159,12 +191,14 @@ bool Scene::hit_cell(int cx, int cy, Vec3 o, Vec3 d, double t_min, double t_max,
       ok = ray_sphere(town_.spheres[r.index], o, d, t_min, &t, &n);
       albedo = town_.spheres[r.index].color;
     }
+    const bool lamp = r.kind == 2 && town_.spheres[r.index].lamp;
     if (!ok || t >= t_max || t >= hit->t) continue;
     hit->t = t;
     hit->point = o + d * t;
     hit->normal = n;
     hit->albedo = r.kind == 0 ? surface(town_.boxes[r.index], hit->point, n) : albedo;
     hit->sky = false;
+    hit->lamp = lamp;
     any = true;
   }
   return any;
@@ -182,6 +216,7 @@ bool Scene::intersect(Vec3 o, Vec3 d, double t_max, Hit* hit) const {
       hit->normal = {0, 0, 1};
       hit->albedo = town_.ground(hit->point.x, hit->point.y);
       hit->sky = false;
+      hit->lamp = false;
     }
   }
   // 2-D DDA over the grid cells.
@@ -242,17 +277,24 @@ Color Scene::shade(Vec3 o, Vec3 d, const Lighting& L) const {
          float(L.sky_horizon.g * (1 - k) + L.sky_zenith.g * k),
          float(L.sky_horizon.b * (1 - k) + L.sky_zenith.b * k)};
     const double sun = dot(d, L.sun_dir);
-    if (sun > 0.9995) c = {1.0f, 0.98f, 0.9f};
+    const bool sunlit = L.sun.r + L.sun.g + L.sun.b > 0.3f;
+    if (sun > 0.9995 && sunlit) c = {1.0f, 0.98f, 0.9f};
     return c;
   }
-  double diffuse = std::max(0.0, dot(h.normal, L.sun_dir));
-  if (diffuse > 0) {  // hard shadow
-    Hit s;
-    if (intersect(h.point + h.normal * 1e-4, L.sun_dir, 400.0, &s)) diffuse = 0;
+  const bool night = L.lamp_intensity > 0 || L.headlight > 0;
+  if (h.lamp && night) {  // a lit street light: its own colour, through the haze
+    c = {1.0f, 0.93f, 0.75f};
+  } else {
+    double diffuse = std::max(0.0, dot(h.normal, L.sun_dir));
+    if (diffuse > 0) {  // hard shadow
+      Hit s;
+      if (intersect(h.point + h.normal * 1e-4, L.sun_dir, 400.0, &s)) diffuse = 0;
+    }
+    const Color extra = night ? night_light(h, d, L) : Color{};
+    c = {float(h.albedo.r * (L.ambient.r + L.sun.r * diffuse + extra.r)),
+         float(h.albedo.g * (L.ambient.g + L.sun.g * diffuse + extra.g)),
+         float(h.albedo.b * (L.ambient.b + L.sun.b * diffuse + extra.b))};
   }
-  c = {float(h.albedo.r * (L.ambient.r + L.sun.r * diffuse)),
-       float(h.albedo.g * (L.ambient.g + L.sun.g * diffuse)),
-       float(h.albedo.b * (L.ambient.b + L.sun.b * diffuse))};
   const float f = float(std::exp(-h.t / L.fog_distance));
   c = {c.r * f + L.fog.r * (1 - f), c.g * f + L.fog.g * (1 - f), c.b * f + L.fog.b * (1 - f)};
   return c;

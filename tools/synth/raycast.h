@@ -15,6 +15,7 @@ struct Hit {
   Vec3 normal;
   Color albedo;
   bool sky = true;
+  bool lamp = false;  // a street light's head
 };
 
 struct Lighting {
@@ -26,6 +27,12 @@ struct Lighting {
   Color fog{0.75f, 0.8f, 0.88f};
   double fog_distance = 600.0;  // e-folding distance of the haze, metres
   double exposure = 1.0;
+  // Night: the street lights as point lights (intensity at 1 m, falling
+  // with the square of the distance, reaching kLampReach) and the vehicle's
+  // own headlights (a light at the camera, on what is below the horizon).
+  double lamp_intensity = 0.0;
+  Color lamp{1.0f, 0.82f, 0.55f};
+  double headlight = 0.0;
 };
 
 class Scene {
@@ -42,6 +49,8 @@ class Scene {
     int index;
   };
   bool hit_cell(int cx, int cy, Vec3 o, Vec3 d, double t_min, double t_max, Hit* hit) const;
+  // Light from the street lights and the headlights at a hit seen along d.
+  Color night_light(const Hit& h, Vec3 d, const Lighting& L) const;
   Color surface(const Box& b, Vec3 p, Vec3 n) const;
 
   const Town& town_;
@@ -49,6 +58,7 @@ class Scene {
   double cell_ = 10.0;
   int cells_ = 0;
   std::vector<std::vector<Ref>> grid_;
+  std::vector<std::vector<Vec3>> lamps_;  // street lights' heads per grid cell
 };
 
 }  // namespace aprt::synth

@@ -173,7 +173,7 @@ Town make_town(uint32_t seed) {
           if (std::hypot(x - t.roundabout.x, y - t.roundabout.y) < t.roundabout_r + 3) continue;
           if (std::fmod(a, t.block) < 8 || std::fmod(a, t.block) > t.block - 8) continue;
           t.cylinders.push_back({x, y, 0.12, 0.0, 6.0, {0.3f, 0.3f, 0.32f}, id++});
-          t.spheres.push_back({x, y, 6.1, 0.35, {1.0f, 0.95f, 0.7f}, id++});
+          t.spheres.push_back({x, y, 6.1, 0.35, {1.0f, 0.95f, 0.7f}, id++, true});
           if ((s + horizontal) % 2 == 0 && sign == 1) {
             const double tx = horizontal ? a + 10 : x, ty = horizontal ? y : a + 10;
             if (tx < t.extent - 8 && ty < t.extent - 8) {

@@ -57,6 +57,7 @@ struct Sphere {
   double cx, cy, cz, r;
   Color color;
   uint32_t id;
+  bool lamp = false;  // a street light's head: it glows when the lamps are on (night)
 };
 
 struct Town {
