@@ -148,8 +148,8 @@ Color Scene::night_light(const Hit& h, Vec3 d, const Lighting& L) const {
   }
   // Headlights: on what is ahead and below the horizon, fading with distance.
   const double cone = std::clamp(1.0 - 8.0 * std::max(0.0, d.z + 0.03), 0.0, 1.0);
-  const double head = L.headlight * cone * std::max(0.0, -dot(h.normal, d)) /
-                      (1.0 + (h.t / 9.0) * (h.t / 9.0));
+  const double head =
+      L.headlight * cone * std::max(0.0, -dot(h.normal, d)) / (1.0 + (h.t / 9.0) * (h.t / 9.0));
   return {float(L.lamp.r * lamps + head), float(L.lamp.g * lamps + head),
           float(L.lamp.b * lamps + 0.95 * head)};
 }
