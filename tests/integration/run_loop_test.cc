@@ -178,8 +178,9 @@ Config shipped_config() {
   c.source.replay.frames = 80;
   c.output.console = false;
   c.output.summary = false;
-  c.sanity.max_jump_m = 0;  // only the injected faults flag poses
+  c.sanity.max_jump_m = 0;  // only the injected faults flag poses:
   c.sanity.bounds_margin = 1;
+  c.sanity.track.enabled = false;  // the validity gate is tested on its own (pose_gate_test)
   c.supervisor.rate_hz = 200;
   c.supervisor.frame_timeout_ms = 300;
   // Generous: a sanitizer build's inference must not miss it by itself; the
