@@ -367,6 +367,13 @@ TEST(CanDbc, MalformedFilesAreRefusedWithTheLine) {
   auto e = parse_dbc("BO_ nonsense\n", "t.dbc");
   ASSERT_FALSE(e);
   EXPECT_NE(std::string(e.error().message()).find("t.dbc:1: malformed BO_"), std::string::npos);
+  // Found by the DBC fuzzer: a huge length overflowed the signal check's
+  // length in bits (signed overflow).
+  auto f = parse_dbc("BO_ 1 M: 878978568 N\n SG_ S : 0|8@1+ (1,0) [0|1] \"\" N\n", "t.dbc");
+  ASSERT_FALSE(f);
+  EXPECT_NE(std::string(f.error().message()).find("t.dbc:1: BO_ with a length outside 0..64"),
+            std::string::npos)
+      << f.error().message();
 }
 
 TEST(CanDbc, MotorolaSignals) {

@@ -95,6 +95,11 @@ Expected<Dbc> parse_dbc(const std::string& text, const std::string& origin) {
           4) {
         return bad(origin, lineno, "malformed BO_ line (expected: BO_ <id> <name>: <dlc> <node>)");
       }
+      // A frame has at most 64 bytes (CAN FD); the signals' bounds are
+      // checked against this length in bits.
+      if (length < 0 || length > 64) {
+        return bad(origin, lineno, "BO_ with a length outside 0..64 bytes");
+      }
       DbcMessage m;
       m.id = uint32_t(id & 0x1FFFFFFF);  // bit 31 marks an extended id in DBC
       m.name = name;
