@@ -46,6 +46,9 @@ for path in ./usr/bin/aprt ./etc/aprt/aprt.yaml ./usr/lib/systemd/system/aprt.se
   grep -q " $path\$" <<<"$contents" || fail "no $path in the packages"
 done
 grep -q "cmake/aprt/aprtConfig.cmake\$" <<<"$contents" || fail "no aprtConfig.cmake in $dev"
+if [ "$arch" = amd64 ]; then
+  grep -q " ./usr/lib/aprt/aprt_libcamera.so\$" <<<"$contents" || fail "no libcamera module in $deb"
+fi
 
 mkdir -p "$scratch/root"
 dpkg-deb -x "$deb" "$scratch/root"
@@ -62,6 +65,12 @@ echo "== aprt run --check (the installed ECU configuration)"
 "${aprt[@]}" run --check --config "$root/etc/aprt/aprt.yaml" --model "$model"
 echo "== aprt run --check (the installed Autoware configuration, its model path relative)"
 "${aprt[@]}" run --check --config "$root/usr/share/aprt/config/autoware.yaml"
+if [ "$arch" = amd64 ]; then
+  echo "== aprt cameras (the libcamera module found beside the installed binary)"
+  "${aprt[@]}" cameras | tee "$scratch/cameras.txt"
+  grep -q "^libcamera cameras: " "$scratch/cameras.txt" && ! grep -q "cannot load" "$scratch/cameras.txt" ||
+    fail "the installed aprt does not load its libcamera module"
+fi
 echo "== aprt info (the shipped model)"
 "${aprt[@]}" info "$model" | head -20
 echo "== aprt run with no configuration (default from $root/usr/share/aprt)"

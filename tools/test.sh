@@ -11,6 +11,9 @@
 #   tools/test.sh --package  .deb packages (amd64; arm64 when the aarch64 build
 #                            exists): contents, scratch-root install, aprt info,
 #                            aprt run, find_package(aprt) from another project
+#   tools/test.sh --plain    integrator builds: plain CMake (no presets) in Release with
+#                            GCC and with clang, distribution flags added; cmake
+#                            --install against the packages' file list
 #   tools/test.sh --hil [S]  the HIL scenarios (tests/hil: SocketCAN on vcan, softdog)
 #                            in a Debian-kernel VM under qemu; S: one scenario
 # Run tools/setup.sh first (it installs and builds).
@@ -72,6 +75,10 @@ case "${1:-}" in
       tools/package_smoke.sh aarch64
     fi
     ;;
+  --plain)
+    tools/plain_build.sh gcc Release
+    tools/plain_build.sh clang Release
+    ;;
   --hil)
     cmake --preset release >/dev/null
     cmake --build --preset release -j "$jobs" --target aprt aprt_synth
@@ -79,7 +86,7 @@ case "${1:-}" in
     tests/hil/run.sh "$@"
     ;;
   *)
-    echo "usage: tools/test.sh [--slow | --fuzz SECONDS | --tsan | --aarch64 | --package | --hil [SCENARIO]]" >&2
+    echo "usage: tools/test.sh [--slow | --fuzz SECONDS | --tsan | --aarch64 | --package | --plain | --hil [SCENARIO]]" >&2
     exit 2
     ;;
 esac

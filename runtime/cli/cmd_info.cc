@@ -22,6 +22,62 @@ const char* resize_text(format::ResizePolicy p) {
                                              : "shorter side to size, centre crop";
 }
 
+double mb(size_t bytes) {
+  return double(bytes) / 1e6;
+}
+
+// Where the file's bytes and the engine's block go: every weight once, kept as
+// stored or packed into the layout of the kernel chosen on this CPU.
+void print_memory(const Engine& e) {
+  const MemoryReport& r = e.memory();
+  size_t by_dtype[8] = {};
+  for (size_t i = 0; i < e.tensor_count(); ++i) {
+    const Tensor& t = e.tensor(i);
+    if (t.is_const() && size_t(t.dtype) < 8) by_dtype[size_t(t.dtype)] += t.bytes;
+  }
+  std::printf("file         %.2f MB: weights %.2f (", mb(r.file_bytes), mb(r.weight_bytes));
+  bool first = true;
+  for (size_t d = 0; d < 8; ++d) {
+    if (!by_dtype[d]) continue;
+    std::printf("%s%s %.2f", first ? "" : ", ", format::dtype_name(format::DType(d)),
+                mb(by_dtype[d]));
+    first = false;
+  }
+  std::printf("), tables %.3f\n", mb(r.file_bytes - r.weight_bytes));
+  std::printf(
+      "memory       %.2f MB in one block: tables %.3f + weights kept as stored %.3f (%zu "
+      "tensors) + packed %.2f (%zu ops) + arena %.3f + scratch %.3f\n",
+      mb(r.total_bytes), mb(r.tables_bytes), mb(r.kept_bytes), r.kept_count, mb(r.packed_bytes),
+      r.packed_count, mb(r.arena_bytes), mb(r.scratch_bytes));
+  // The packed layouts, in order of first use.
+  const char* layouts[8] = {};
+  int tiles[8] = {}, ops[8] = {};
+  size_t bytes[8] = {};
+  int kinds = 0;
+  for (size_t i = 0; i < e.op_count(); ++i) {
+    const OpNode& n = e.op(i);
+    if (!n.packed_floats) continue;
+    int at = 0;
+    while (at < kinds &&
+           !(std::strcmp(layouts[at], n.packed_layout) == 0 && tiles[at] == n.packed_tile))
+      ++at;
+    if (at == kinds && kinds < 8) {
+      layouts[kinds] = n.packed_layout;
+      tiles[kinds++] = n.packed_tile;
+    }
+    if (at < kinds) {
+      ++ops[at];
+      bytes[at] += n.packed_floats * sizeof(float);
+    }
+  }
+  for (int i = 0; i < kinds; ++i) {
+    char tile[24] = "";
+    if (tiles[i]) std::snprintf(tile, sizeof tile, ", nr %d", tiles[i]);
+    std::printf("%s %s%s: %d ops, %.3f MB\n", i ? "            " : "packed      ", layouts[i], tile,
+                ops[i], mb(bytes[i]));
+  }
+}
+
 }  // namespace
 
 int cmd_info(int argc, char** argv) {
@@ -138,9 +194,7 @@ int cmd_info(int argc, char** argv) {
       "%.3f MB liveness lower bound\n",
       double(r.arena_bytes) / 1e6, double(r.arena_sum_bytes) / 1e6,
       double(r.arena_lower_bound_bytes) / 1e6);
-  std::printf("memory       %.2f MB in one block (image %.2f + arena %.3f + scratch %.3f)\n",
-              double(r.total_bytes) / 1e6, double(r.image_bytes) / 1e6, double(r.arena_bytes) / 1e6,
-              double(r.scratch_bytes) / 1e6);
+  print_memory(e);
   if (list_ops) {
     std::printf("\n  #  op              MFLOP  output          kernel      name\n");
     for (size_t i = 0; i < e.op_count(); ++i) {

@@ -14,6 +14,7 @@
 #include "runtime/config/config.h"
 #include "runtime/engine/engine.h"
 #include "runtime/loop/model_loader.h"
+#include "runtime/loop/process_memory.h"
 #include "runtime/loop/runtime.h"
 
 namespace aprt::cli {
@@ -49,6 +50,29 @@ std::string source_text(const Config::Source& s) {
   return s.v4l2.device;
 }
 
+// The memory budget as far as it is known before a thread starts: the
+// engine's block (exact), the stacks (threads.stack_kib each), the program and
+// its libraries as loaded now, the heap; the run's summary and timing report
+// measure the same parts once it runs (docs/configuration.md, "Memory").
+void print_budget(const Config& cfg, const Engine& e) {
+  const size_t stack = thread_stack_bytes(cfg.threads);
+  MemoryBudget now;
+  if (!measure_memory(e.memory_block(), e.memory().total_bytes, stack, &now)) return;
+  const MemoryReport& m = e.memory();
+  auto mb = [](double bytes) { return bytes / 1e6; };
+  std::printf(
+      "aprt run: memory budget: engine block %.1f MB (tables %.2f, weights kept %.1f, packed "
+      "%.1f, arena %.1f, scratch %.1f); thread stacks %zu KiB each (the loop's threads, %d "
+      "engine worker%s, the DDS library's); program and libraries %.1f MB resident now; heap "
+      "and other %.1f MB; %s\n",
+      mb(double(m.total_bytes)), mb(double(m.tables_bytes)), mb(double(m.kept_bytes)),
+      mb(double(m.packed_bytes)), mb(double(m.arena_bytes)), mb(double(m.scratch_bytes)),
+      stack / 1024, cfg.engine.threads - 1, cfg.engine.threads == 2 ? "" : "s",
+      mb(double(now.code_kb) * 1024), mb(double(now.other_kb) * 1024),
+      cfg.threads.lock_memory ? "lock_memory: every mapping is locked and resident"
+                              : "lock_memory off: only the engine's block is locked");
+}
+
 int check_only(const std::string& path, const Config& cfg) {
   std::string note;
   auto engine = load_model(model_request(cfg), &note);
@@ -63,6 +87,7 @@ int check_only(const std::string& path, const Config& cfg) {
   }
   std::printf("aprt run: %s: configuration valid; model %s loads (%s kernels, %zu bytes)\n",
               path.c_str(), cfg.model.c_str(), (*engine)->isa(), (*engine)->memory().total_bytes);
+  print_budget(cfg, **engine);
   if (!cfg.cameras.empty()) {
     std::printf("aprt run: %zu cameras fused (trigger: %s)\n", cfg.cameras.size(),
                 cfg.cameras[0].name.c_str());

@@ -14,6 +14,7 @@
 
 #include "kernels/table/cpu_features.h"
 #include "runtime/base/check.h"
+#include "runtime/base/crc32.h"
 #include "runtime/base/file_io.h"
 #include "runtime/engine/denormals.h"
 #include "runtime/engine/memory_planner.h"
@@ -188,23 +189,49 @@ Expected<std::unique_ptr<Engine>> Engine::build(const uint8_t* data, size_t size
   if (Status s = e->prepare_ops(); !s) return s.error();
   size_t arena = 0;
   e->plan(&arena);
+  e->mark_kept();
   MemoryReport& m = e->memory_;
   m.packed_bytes = 0;
   for (const OpNode& n : e->nodes_) {
     e->scratch_floats_ = std::max(e->scratch_floats_, n.scratch_floats);
     e->thread_scratch_floats_ = std::max(e->thread_scratch_floats_, n.thread_scratch_floats);
     m.packed_bytes += round_up(n.packed_floats * sizeof(float), kAlign);
+    m.packed_count += n.packed_floats ? 1 : 0;
   }
-  m.image_bytes = round_up(size, kAlign);
+  m.file_bytes = size;
+  m.tables_bytes = round_up(size_t(e->model_.tables_bytes()), kAlign);
   m.weight_bytes = 0;
-  for (const Tensor& t : e->tensors_) m.weight_bytes += t.is_const() ? t.bytes : 0;
+  m.kept_bytes = 0;
+  for (size_t i = 0; i < e->tensors_.size(); ++i) {
+    const Tensor& t = e->tensors_[i];
+    m.weight_bytes += t.is_const() ? t.bytes : 0;
+    m.kept_bytes += e->kept_[i] ? round_up(t.bytes, kAlign) : 0;
+    m.kept_count += e->kept_[i];
+  }
   m.scratch_bytes =
       round_up(e->scratch_floats_ * sizeof(float), kAlign) +
       size_t(options.threads) * round_up(e->thread_scratch_floats_ * sizeof(float), kAlign);
-  m.total_bytes = m.image_bytes + m.packed_bytes + round_up(arena, kAlign) + m.scratch_bytes;
+  m.total_bytes =
+      m.tables_bytes + m.kept_bytes + m.packed_bytes + round_up(arena, kAlign) + m.scratch_bytes;
   if (required) *required = m.total_bytes;
   (void)plan_only;  // both passes plan; only the caller decides what to keep
   return e;
+}
+
+// A constant is kept unless every op that reads it packs it (OpNode::packed_inputs);
+// per-channel scales go with the weights they scale.
+void Engine::mark_kept() {
+  kept_.assign(tensors_.size(), 0);
+  for (const OpNode& n : nodes_) {
+    for (int k = 0; k < n.n_in; ++k) {
+      const Tensor* t = n.in[k];
+      if (t && t->is_const() && !(n.packed_inputs & (1u << k)))
+        kept_[size_t(t - tensors_.data())] = 1;
+    }
+  }
+  for (size_t i = 0; i < tensors_.size(); ++i) {
+    if (kept_[i] && tensors_[i].qscale) kept_[size_t(tensors_[i].qscale - tensors_.data())] = 1;
+  }
 }
 
 Expected<size_t> Engine::memory_required(const uint8_t* data, size_t size) {
@@ -219,14 +246,66 @@ Expected<size_t> Engine::memory_required(const uint8_t* data, size_t size) {
 
 Expected<std::unique_ptr<Engine>> Engine::load_memory(const uint8_t* data, size_t size,
                                                       const EngineOptions& options) {
+  return load_image(Source{data, size, -1}, options);
+}
+
+bool Engine::Source::read(uint64_t offset, size_t n, void* dst) const {
+  if (offset > size || n > size - offset) return false;
+  if (fd < 0) {
+    std::memcpy(dst, data + offset, n);
+    return true;
+  }
+  auto* out = static_cast<uint8_t*>(dst);
+  while (n > 0) {
+    const ssize_t got = pread(fd, out, n, off_t(offset));
+    if (got < 0 && errno == EINTR) continue;
+    if (got <= 0) return false;
+    out += got;
+    offset += uint64_t(got);
+    n -= size_t(got);
+  }
+  return true;
+}
+
+// Bytes of the file into their place in the source's reservation.
+bool Engine::fetch_from_file(void* context, uint64_t offset, uint64_t size) {
+  const auto* source = static_cast<const Source*>(context);
+  return source->read(offset, size_t(size), const_cast<uint8_t*>(source->data) + offset);
+}
+
+// A section's checksum read from the file through a 1 MiB buffer.
+bool Engine::crc_from_file(void* context, uint64_t offset, uint64_t size, uint32_t* crc) {
+  const auto* source = static_cast<const Source*>(context);
+  constexpr size_t kPiece = size_t(1) << 20;
+  std::unique_ptr<uint8_t[]> buf(new (std::nothrow) uint8_t[kPiece]);
+  if (!buf) return false;
+  uint32_t c = 0;
+  for (uint64_t at = 0; at < size; at += kPiece) {
+    const size_t n = size_t(size - at < kPiece ? size - at : kPiece);
+    if (!source->read(offset + at, n, buf.get())) return false;
+    c = crc32(buf.get(), n, c);
+  }
+  *crc = c;
+  return true;
+}
+
+Expected<std::unique_ptr<Engine>> Engine::load_image(const Source& source,
+                                                     const EngineOptions& options) {
   if (const char* missing = kernels::missing_build_feature())
     return Error(Errc::kUnsupported,
                  "engine: this build assumes %s (compiled with -march=...), which this CPU does "
                  "not report; rebuild for the target's baseline (docs/architecture.md)",
                  missing);
-  // Pass 1 on the caller's bytes: validate everything (checksums included) and size.
-  auto checked =
-      ModelFile::parse(data, size, ParseOptions{.verify_checksums = options.verify_checksums});
+  const uint8_t* const data = source.data;
+  const size_t size = source.size;
+  // Pass 1: validate everything (checksums included) and size.
+  ParseOptions parse_options{.verify_checksums = options.verify_checksums};
+  if (source.fd >= 0) {
+    parse_options.section_crc = crc_from_file;
+    parse_options.fetch = fetch_from_file;
+    parse_options.source = const_cast<Source*>(&source);
+  }
+  auto checked = ModelFile::parse(data, size, parse_options);
   if (!checked) return checked.error();
   size_t required = 0;
   {
@@ -249,9 +328,9 @@ Expected<std::unique_ptr<Engine>> Engine::load_memory(const uint8_t* data, size_
                 std::strerror(errno));
     owned = true;
   }
-  std::memcpy(region, data, size);
-  // Pass 2 on the copy the engine keeps (identical bytes; no second checksum pass).
-  auto built = build(region, size, options, false, nullptr);
+  // Pass 2 binds to the source again (no second checksum pass); the
+  // constants then move into the region.
+  auto built = build(data, size, options, false, nullptr);
   if (!built) {
     if (owned) munmap(region, required);
     return built.error();
@@ -262,8 +341,10 @@ Expected<std::unique_ptr<Engine>> Engine::load_memory(const uint8_t* data, size_
   e->region_owned_ = owned;
   MemoryReport& m = e->memory_;
   m.caller_memory = !owned;
+  uint8_t* const kept = region + m.tables_bytes;
+  uint8_t* const packed = kept + m.kept_bytes;
   // Bind: packed weights, then the arena, then the scratch areas.
-  uint8_t* cursor = region + m.image_bytes;
+  uint8_t* cursor = packed;
   for (OpNode& n : e->nodes_) {
     if (!n.packed_floats) continue;
     n.packed = reinterpret_cast<float*>(cursor);
@@ -274,16 +355,19 @@ Expected<std::unique_ptr<Engine>> Engine::load_memory(const uint8_t* data, size_
     if (e->arena_offsets_[i] != kNotInArena) e->tensors_[i].data = arena + e->arena_offsets_[i];
   }
   cursor = arena + round_up(m.arena_bytes, kAlign);
-  // Prefault: every page after the image is written once here, not during run().
-  std::memset(region + m.image_bytes, 0, required - m.image_bytes);
+  // Prefault: the arena and scratch are written once here, not during run()
+  // (the kept and packed weights are written when they are placed).
+  std::memset(arena, 0, required - size_t(arena - region));
   e->ctx_.scratch = reinterpret_cast<float*>(cursor);
   cursor += round_up(e->scratch_floats_ * sizeof(float), kAlign);
   for (int t = 0; t < options.threads; ++t) {
     e->ctx_.thread_scratch[t] = reinterpret_cast<float*>(cursor);
     cursor += round_up(e->thread_scratch_floats_ * sizeof(float), kAlign);
   }
-  for (OpNode& n : e->nodes_) {
-    if (n.pack) n.pack(n);
+  if (Status s = e->place_constants(region, kept, source); !s) {
+    e.reset();
+    if (owned) munmap(region, required);
+    return s.error();
   }
   if (options.threads > 1) {
     auto pool = ThreadPool::create(options.threads, options.cpus, options.n_cpus);
@@ -308,6 +392,68 @@ Expected<std::unique_ptr<Engine>> Engine::load_memory(const uint8_t* data, size_
     }
   }
   return e;
+}
+
+// The tables and the kept constants are copied into the region, the others
+// packed by their ops (read from a file through a buffer of the largest op's
+// packed inputs); then nothing points into the source any more.
+Status Engine::place_constants(uint8_t* tables, uint8_t* kept, const Source& source) {
+  const uint8_t* const file = source.data;
+  const size_t hole = size_t(model_.weights_offset()), hole_bytes = size_t(model_.weights_bytes());
+  const size_t size = size_t(model_.file_bytes());
+  std::memcpy(tables, file, hole);
+  std::memcpy(tables + hole, file + hole + hole_bytes, size - hole - hole_bytes);
+  const auto& entries = model_.tensors();
+  auto file_offset = [&](size_t i) { return model_.weights_offset() + entries[i].data_offset; };
+  auto index = [&](const Tensor* t) { return size_t(t - tensors_.data()); };
+  for (size_t i = 0; i < tensors_.size(); ++i) {
+    if (!kept_[i]) continue;
+    Tensor& t = tensors_[i];
+    APRT_ENSURE(source.read(file_offset(i), t.bytes, kept), Errc::kIo,
+                "model_bin: cannot read tensor '%s' (file changed while loading?)", t.name);
+    t.data = kept;
+    kept += round_up(t.bytes, kAlign);
+  }
+  size_t bounce_bytes = 0;
+  for (const OpNode& n : nodes_) {
+    size_t need = 0;
+    for (int k = 0; k < n.n_in; ++k) {
+      if ((n.packed_inputs & (1u << k)) && !kept_[index(n.in[k])])
+        need += round_up(n.in[k]->bytes, kAlign);
+    }
+    bounce_bytes = std::max(bounce_bytes, need);
+  }
+  std::unique_ptr<uint8_t[]> bounce;
+  if (source.fd >= 0 && bounce_bytes > 0) {
+    bounce.reset(new (std::nothrow) uint8_t[bounce_bytes + kAlign]);
+    APRT_ENSURE(bounce != nullptr, Errc::kOutOfMemory,
+                "engine: out of memory for a %zu-byte load buffer", bounce_bytes);
+  }
+  uint8_t* const bounce_at =
+      bounce
+          ? reinterpret_cast<uint8_t*>(round_up(reinterpret_cast<uintptr_t>(bounce.get()), kAlign))
+          : nullptr;
+  for (OpNode& n : nodes_) {
+    if (!n.pack) continue;
+    size_t used = 0;
+    for (int k = 0; bounce_at && k < n.n_in; ++k) {
+      Tensor* t = n.in[k];
+      if (!(n.packed_inputs & (1u << k)) || kept_[index(t)]) continue;
+      APRT_ENSURE(source.read(file_offset(index(t)), t->bytes, bounce_at + used), Errc::kIo,
+                  "model_bin: cannot read tensor '%s' (file changed while loading?)", t->name);
+      t->data = bounce_at + used;
+      used += round_up(t->bytes, kAlign);
+    }
+    n.pack(n);
+  }
+  for (size_t i = 0; i < tensors_.size(); ++i) {
+    if (tensors_[i].is_const() && !kept_[i]) tensors_[i].data = nullptr;
+  }
+  model_.relocate_tables(file, tables);
+  for (size_t i = 0; i < tensors_.size(); ++i) tensors_[i].name = entries[i].name;
+  const auto& ops = model_.ops();
+  for (size_t i = 0; i < nodes_.size(); ++i) nodes_[i].name = ops[i].name;
+  return ok();
 }
 
 Expected<std::vector<uint8_t>> Engine::read_model_file(const char* path) {
@@ -346,9 +492,53 @@ Expected<std::vector<uint8_t>> Engine::read_model_file(const char* path) {
 
 Expected<std::unique_ptr<Engine>> Engine::load_file(const char* path,
                                                     const EngineOptions& options) {
-  auto bytes = read_model_file(path);
-  if (!bytes) return bytes.error();
-  auto e = load_memory(bytes->data(), bytes->size(), options);
+  // The same checks as read_model_file() up to the body; then the tables are
+  // read into a reservation the size of the file (untouched pages cost no
+  // memory) and the weights from the file as load_image() places them. No
+  // mapping of the file: one truncated while it loads is a read error, not SIGBUS.
+  auto f = open_input_file(path, kMaxModelFileBytes, "model_bin");
+  if (!f) return f.error();
+  const uint64_t size = f->size();
+  uint8_t head[format::kHeaderBytes] = {};
+  const long got = f->read(head, size < sizeof head ? size_t(size) : sizeof head);
+  APRT_ENSURE(got >= 0, Errc::kIo, "model_bin: cannot read '%s': %s", path, std::strerror(errno));
+  APRT_ENSURE(size >= 8 && std::memcmp(head, format::kMagic, 8) == 0, Errc::kBadMagic,
+              "model_bin: '%s' is not an aprt model file (bad magic)", path);
+  void* map = mmap(nullptr, size_t(size), PROT_READ | PROT_WRITE,
+                   MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+  APRT_ENSURE(map != MAP_FAILED, Errc::kOutOfMemory, "model_bin: cannot reserve %llu bytes: %s",
+              static_cast<unsigned long long>(size), std::strerror(errno));
+  auto* staging = static_cast<uint8_t*>(map);
+  const Source source{staging, size_t(size), f->fd()};
+  // Everything but the WEIGHTS section (found in the section table; if the
+  // table is unreadable, the whole file, and parse() says what is wrong).
+  uint64_t hole = size, hole_bytes = 0;
+  if (size >= format::kHeaderBytes) {
+    uint32_t count = 0;
+    std::memcpy(&count, head + 24, 4);
+    for (uint32_t i = 0; i < count && i < format::kMaxSections; ++i) {
+      uint8_t entry[format::kSectionEntryBytes];
+      const uint64_t at = format::kHeaderBytes + uint64_t(i) * format::kSectionEntryBytes;
+      if (!source.read(at, sizeof entry, entry)) break;
+      uint32_t tag = 0;
+      uint64_t offset = 0, bytes = 0;
+      std::memcpy(&tag, entry, 4);
+      std::memcpy(&offset, entry + 8, 8);
+      std::memcpy(&bytes, entry + 16, 8);
+      if (tag == format::kSecWeights && offset <= size && bytes <= size - offset) {
+        hole = offset;
+        hole_bytes = bytes;
+      }
+    }
+  }
+  bool read_ok =
+      source.read(0, size_t(hole), staging) &&
+      source.read(hole + hole_bytes, size_t(size - hole - hole_bytes), staging + hole + hole_bytes);
+  Expected<std::unique_ptr<Engine>> e =
+      read_ok ? load_image(source, options)
+              : Expected<std::unique_ptr<Engine>>(
+                    Error(Errc::kIo, "model_bin: short read (file changed while read?)"));
+  munmap(map, size_t(size));
   if (!e) {
     Error err = e.error();
     err.with_context("%s", path);

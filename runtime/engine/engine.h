@@ -4,7 +4,13 @@
 // plans the activation arena from tensor lifetimes and then takes all the
 // memory it will ever use in one piece (or uses the caller's buffer):
 //
-//   [ model image (weights, tables) | packed weights | activation arena | scratch ]
+//   [ tables | kept weights | packed weights | activation arena | scratch ]
+//
+// One copy of the weights: each constant is either kept as stored (read by
+// run() as it is in the file: biases, norms, depthwise filters) or packed at
+// load into the layout its kernel reads, and then not kept. The tables are the
+// file without its WEIGHTS section (names, metadata). The caller's bytes (or
+// the file) are not referenced after load() returns.
 //
 // It prefaults and (best effort, or required) locks that memory. After load()
 // returns, run() allocates nothing, takes no locks and does a fixed amount of
@@ -50,9 +56,13 @@ struct EngineOptions {
 };
 
 struct MemoryReport {
-  size_t image_bytes = 0;              // the model file as loaded (weights + tables)
-  size_t weight_bytes = 0;             // constant tensors
+  size_t file_bytes = 0;    // the model file
+  size_t weight_bytes = 0;  // constant tensors in the file
+  size_t tables_bytes = 0;  // the file without its weights (names, metadata)
+  size_t kept_bytes = 0;    // constants run() reads as stored
+  size_t kept_count = 0;
   size_t packed_bytes = 0;             // weights repacked for the kernels at load
+  size_t packed_count = 0;             // ops with packed weights
   size_t arena_bytes = 0;              // activation arena as planned
   size_t arena_sum_bytes = 0;          // sum of all activation tensors (no reuse)
   size_t arena_lower_bound_bytes = 0;  // largest set of simultaneously live tensors
@@ -70,7 +80,9 @@ class Engine {
   static Expected<std::unique_ptr<Engine>> load_memory(const uint8_t* data, size_t size,
                                                        const EngineOptions& options = {});
   // A model file's bytes (size-checked, fully read), for callers that check
-  // them (a signature) before load_memory().
+  // them (a signature) before load_memory(). load_file() never holds the
+  // whole file: it reads the weights piece by piece into their place, so the
+  // process's peak is the engine's block and its largest packed tensor.
   static Expected<std::vector<uint8_t>> read_model_file(const char* path);
   // Bytes load_memory() needs for EngineOptions::memory.
   static Expected<size_t> memory_required(const uint8_t* data, size_t size);
@@ -92,6 +104,7 @@ class Engine {
   const ModelMeta& meta() const { return model_.meta(); }
   const ModelFile& model() const { return model_; }
   const MemoryReport& memory() const { return memory_; }
+  const void* memory_block() const { return region_; }  // MemoryReport::total_bytes long
   const char* isa() const;  // the kernels chosen at load ("avx512", "ref", ...)
   // Those kernels (null: the reference kernels), e.g. for the frame
   // preprocessing that feeds this engine.
@@ -106,20 +119,38 @@ class Engine {
 
  private:
   Engine() = default;
+  // Where load() reads the model: `data` holds all of it (in memory), or,
+  // with fd >= 0, only its tables, in place in a reservation the size of the
+  // file: the weights are read from the file into where they go (kept, or a
+  // buffer to pack from), never all at once.
+  struct Source {
+    const uint8_t* data = nullptr;
+    size_t size = 0;
+    int fd = -1;
+    bool read(uint64_t offset, size_t n, void* dst) const;
+  };
+  // ParseOptions::section_crc and ::fetch over a Source with a file.
+  static bool crc_from_file(void* source, uint64_t offset, uint64_t size, uint32_t* crc);
+  static bool fetch_from_file(void* source, uint64_t offset, uint64_t size);
+  static Expected<std::unique_ptr<Engine>> load_image(const Source& source,
+                                                      const EngineOptions& options);
   static Expected<std::unique_ptr<Engine>> build(const uint8_t* data, size_t size,
                                                  const EngineOptions& options, bool plan_only,
                                                  size_t* required);
+  Status place_constants(uint8_t* tables, uint8_t* kept, const Source& source);
   Status bind(const uint8_t* data, size_t size);
   Status prepare_ops();
   void plan(size_t* arena_bytes);
+  void mark_kept();
 
   ModelFile model_;
   std::vector<Tensor> tensors_;
   std::vector<OpNode> nodes_;
   std::vector<size_t> arena_offsets_;  // per tensor; SIZE_MAX if not in the arena
+  std::vector<uint8_t> kept_;          // per tensor: a constant run() reads as stored
   Tensor* input_ = nullptr;
   Tensor* output_ = nullptr;
-  uint8_t* region_ = nullptr;  // image | packed | arena | scratch
+  uint8_t* region_ = nullptr;  // tables | kept | packed | arena | scratch
   size_t region_bytes_ = 0;
   bool region_owned_ = false;
   kernels::KernelTable kt_;  // the ISA chosen at load (kernels/table/kernel_table.h)

@@ -141,7 +141,15 @@ class ModelFileParser {
     // Checksums after the structure, so that a structural defect gets its own message.
     for (uint32_t i = 0; i < n_sections_ && options_.verify_checksums; ++i) {
       const Section& s = sections_[i];
-      APRT_ENSURE(crc32(s.data, s.size) == s.crc, Errc::kChecksum,
+      uint32_t crc = 0;
+      if (options_.section_crc) {
+        APRT_ENSURE(options_.section_crc(options_.source, s.offset, s.size, &crc), Errc::kIo,
+                    "model_bin: section %s: cannot read the file (changed while read?)",
+                    section_name(s.tag));
+      } else {
+        crc = crc32(s.data, s.size);
+      }
+      APRT_ENSURE(crc == s.crc, Errc::kChecksum,
                   "model_bin: section %s checksum mismatch (file corrupted or truncated?)",
                   section_name(s.tag));
     }
@@ -203,6 +211,7 @@ class ModelFileParser {
     const Section* w = find(format::kSecWeights);
     file_.weights_ = w->data;
     file_.weights_bytes_ = w->size;
+    file_.weights_offset_ = w->offset;
     uint32_t count = 0;
     if (Status st =
             table_prefix(s, format::kTensorEntryBytes, format::kMaxTensors, "tensor", &count);
@@ -354,6 +363,10 @@ class ModelFileParser {
                   "model_bin: per-channel scales '%s' of '%s' must be an f32 constant of one "
                   "value per channel (%u, or %u for depthwise weights)",
                   q.name, t.name, first, last);
+      if (options_.fetch) {
+        APRT_ENSURE(options_.fetch(options_.source, file_.weights_offset_ + q.data_offset, q.bytes),
+                    Errc::kIo, "model_bin: cannot read '%s' (file changed while read?)", q.name);
+      }
       const uint8_t* base = file_.weights_ + q.data_offset;
       for (uint64_t j = 0; j < q.numel; ++j) {
         const float v = load<float>(base + 4 * j);
@@ -450,6 +463,23 @@ class ModelFileParser {
   const Section* strings_ = nullptr;
   ModelFile file_;
 };
+
+void ModelFile::relocate_tables(const uint8_t* file, const uint8_t* tables) {
+  const uint64_t hole_begin = weights_offset_, hole_end = weights_offset_ + weights_bytes_;
+  auto move = [&](const char* p) -> const char* {
+    if (!p) return p;
+    uint64_t at = uint64_t(reinterpret_cast<const uint8_t*>(p) - file);
+    APRT_DCHECK(at < hole_begin || (at >= hole_end && at < file_bytes_));
+    (void)hole_begin;
+    if (at >= hole_end) at -= weights_bytes_;
+    return reinterpret_cast<const char*>(tables + at);
+  };
+  meta_.config_json = move(meta_.config_json);
+  meta_.quantization = move(meta_.quantization);
+  for (TensorEntry& t : tensors_) t.name = move(t.name);
+  for (OpEntry& o : ops_) o.name = move(o.name);
+  weights_ = nullptr;
+}
 
 Expected<ModelFile> ModelFile::parse(const uint8_t* data, size_t size,
                                      const ParseOptions& options) {

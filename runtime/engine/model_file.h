@@ -87,6 +87,14 @@ struct OpEntry {
 
 struct ParseOptions {
   bool verify_checksums = true;
+  // For a loader that does not hold the weights in `data` (Engine::load_file
+  // reads them from the file piece by piece): section_crc computes a
+  // section's checksum from the file (offset and size in it), fetch puts
+  // bytes of the file into `data` before parse() reads them (the per-channel
+  // scales it checks). False: the file could not be read.
+  bool (*section_crc)(void* source, uint64_t offset, uint64_t size, uint32_t* crc) = nullptr;
+  bool (*fetch)(void* source, uint64_t offset, uint64_t size) = nullptr;
+  void* source = nullptr;
 };
 
 class ModelFile {
@@ -97,8 +105,17 @@ class ModelFile {
   const ModelMeta& meta() const { return meta_; }
   const std::vector<TensorEntry>& tensors() const { return tensors_; }
   const std::vector<OpEntry>& ops() const { return ops_; }
+  // The WEIGHTS section (null after relocate_tables()), its size and offset.
   const uint8_t* weights() const { return weights_; }
   uint64_t weights_bytes() const { return weights_bytes_; }
+  uint64_t weights_offset() const { return weights_offset_; }
+  // The file's bytes without the WEIGHTS section ([0, weights_offset) then
+  // what follows the section), which every name and string points into.
+  uint64_t tables_bytes() const { return file_bytes_ - weights_bytes_; }
+  // The engine keeps the tables, not the file: after it copied them to
+  // `tables` (tables_bytes() bytes, as above), every name and metadata string
+  // points there instead of into `file`; weights() is null from then on.
+  void relocate_tables(const uint8_t* file, const uint8_t* tables);
   uint64_t file_bytes() const { return file_bytes_; }
   uint16_t version_major() const { return version_major_; }
   uint16_t version_minor() const { return version_minor_; }
@@ -111,6 +128,7 @@ class ModelFile {
   std::vector<OpEntry> ops_;
   const uint8_t* weights_ = nullptr;
   uint64_t weights_bytes_ = 0;
+  uint64_t weights_offset_ = 0;
   uint64_t file_bytes_ = 0;
   uint16_t version_major_ = 0;
   uint16_t version_minor_ = 0;

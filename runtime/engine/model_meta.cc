@@ -158,7 +158,7 @@ Status parse_model_meta(const uint8_t* data, uint64_t size, ModelMeta* out) {
         break;
       case MetaKey::kBev: {
         if (!(st = expect(MetaType::kF32, 5, 5))) return st;
-        float b[5];
+        float b[5] = {};  // GCC 12 -O3 cannot see f32s() fill it
         if (!(st = f32s(b, 5, "bev"))) return st;
         APRT_ENSURE(b[0] > 0.0f && b[0] <= 10.0f, Errc::kBadMetadata,
                     "model_bin: BEV cell size %g m (0 < cell <= 10)", double(b[0]));

@@ -60,6 +60,13 @@ struct OpNode {
   size_t thread_scratch_floats = 0;      // per thread
   size_t packed_floats = 0;              // weights repacked at load for the kernel
   void (*pack)(OpNode& node) = nullptr;  // fills `packed` once memory exists
+  // Bit k: pack() copies input k (a constant) whole into `packed`, with its
+  // per-channel scales if it has them, and eval never reads it as stored; a
+  // constant every reader packs is not kept after load (one copy of the weights).
+  uint32_t packed_inputs = 0;
+  // What `packed` holds and its tile (columns per panel; 0: none), for `aprt info`.
+  const char* packed_layout = "";
+  int packed_tile = 0;
   float* packed = nullptr;
   uint64_t flops = 0;  // multiply-adds x 2, for profiles
   EvalFn eval = nullptr;

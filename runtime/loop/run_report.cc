@@ -65,6 +65,7 @@ void print_run_summary(const RunSummary& s) {
         quantile(pe, 0.5), ps / double(pe.size()), quantile(pe, 0.9), quantile(re, 0.5),
         rs / double(re.size()), quantile(re, 0.9));
   }
+  if (s.memory && s.memory[0]) std::printf("memory: %s\n", s.memory);
 }
 
 }  // namespace aprt

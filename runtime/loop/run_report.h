@@ -22,6 +22,7 @@ struct RunSummary {
   int threads = 1;
   bool lidar = false;
   std::vector<std::string> camera_names;  // more than one: a fused run
+  const char* memory = "";                // memory_budget_text(), or empty
 };
 
 void print_run_summary(const RunSummary& s);

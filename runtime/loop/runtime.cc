@@ -244,9 +244,16 @@ Health Runtime::health(int64_t now_ns) const {
   return h;
 }
 
+void Runtime::measure_budget() {
+  const Engine& e = models_->running();
+  budget_valid_ = measure_memory(e.memory_block(), e.memory().total_bytes,
+                                 thread_stack_bytes(config_.threads), &budget_);
+}
+
 void Runtime::sample_memory() {
-  if (warm_.valid) return;
   const uint64_t n = shared_.published.load(std::memory_order_acquire);
+  if (!budget_valid_ && n >= kBudgetPoses) measure_budget();
+  if (warm_.valid) return;
   if (!steady_.valid && n > 0) {
     steady_ = {true, allocation_count_ ? allocation_count_() : 0, current_rss_kb()};
   }
@@ -321,6 +328,7 @@ int Runtime::run() {
   set_fatal_handler(previous);
   publisher_->print_state_lines();  // the last change (STOPPING, FAULT) after the last pose
   end_ = {true, allocation_count_ ? allocation_count_() : 0, current_rss_kb()};
+  if (!budget_valid_) measure_budget();  // a run shorter than a second
   models_->finish();
   duration_s_ = double(monotonic_ns() - started_ns_) * 1e-9;
   supervision_->stopping(code == 0);
@@ -334,6 +342,9 @@ int Runtime::run() {
     sum.threads = models_->running().threads();
     sum.lidar = channels_[0]->scans();
     for (const auto& c : channels_) sum.camera_names.push_back(c->name);
+    char memory[200] = "";
+    if (budget_valid_) memory_budget_text(budget_, memory, sizeof memory);
+    sum.memory = memory;
     print_run_summary(sum);
     outputs_->print_summary();
   }
@@ -417,6 +428,7 @@ Status Runtime::write_timing_report(const char* json_path) const {
   ctx.end = end_;
   // getrusage's peak is updated lazily by the kernel; never below what statm saw.
   ctx.peak_rss_kb = std::max(peak_rss_kb(), end_.rss_kb);
+  ctx.budget = budget_valid_ ? &budget_ : nullptr;
   ctx.duration_s = duration_s_;
   size_t n = 0;
   const TimingRecord* t = publisher_->timings(&n);

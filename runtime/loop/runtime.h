@@ -34,6 +34,7 @@
 #include "runtime/loop/loop_shared.h"
 #include "runtime/loop/model_slot.h"
 #include "runtime/loop/pose_outputs.h"
+#include "runtime/loop/process_memory.h"
 #include "runtime/loop/publisher.h"
 #include "runtime/loop/run_stats.h"
 #include "runtime/loop/supervision.h"
@@ -121,6 +122,11 @@ class Runtime {
   // RSS growth is measured from here: the first poses touch preallocated
   // pages (decoder buffers sized for the largest file, stacks) for the first time.
   static constexpr uint64_t kRssWarmupPoses = 1000;
+  // Where the memory is (process_memory.h), once a second's poses are out.
+  static constexpr uint64_t kBudgetPoses = 25;
+  MemoryBudget budget_;
+  bool budget_valid_ = false;
+  void measure_budget();
   // Every stage waits with timeouts of at most kLoopWaitNs, so a stop takes
   // milliseconds; a stage still running after this is blocked in the kernel
   // (a read that never returns), and the process ends without it: a FAULT

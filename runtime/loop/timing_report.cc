@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/loop/process_memory.h"
 #include "runtime/loop/run_stats.h"
 
 namespace aprt {
@@ -38,6 +39,22 @@ std::string escaped(const char* s) {
     if (static_cast<unsigned char>(*s) >= 0x20) out += *s;
   }
   return out;
+}
+
+// ', "budget_kb": {...}' (where the resident memory is), or nothing.
+std::string budget_json(const MemoryBudget* b) {
+  if (!b) return "";
+  char buf[320];
+  std::snprintf(
+      buf, sizeof buf,
+      ", \"budget_kb\": {\"total\": %llu, \"engine_block\": %llu, "
+      "\"program_and_libraries\": %llu, \"stacks\": %llu, \"stack_count\": %u, "
+      "\"heap_and_other\": %llu, \"locked\": %llu}",
+      static_cast<unsigned long long>(b->total_kb), static_cast<unsigned long long>(b->engine_kb),
+      static_cast<unsigned long long>(b->code_kb), static_cast<unsigned long long>(b->stacks_kb),
+      b->stacks, static_cast<unsigned long long>(b->other_kb),
+      static_cast<unsigned long long>(b->locked_kb));
+  return buf;
 }
 
 }  // namespace
@@ -124,7 +141,7 @@ Status write_timing_report(const char* json_path, const TimingRecord* records, s
         "  \"memory\": {\"allocations_after_first_pose\": %llu, \"counter_covers_malloc\": "
         "%s, \"rss_kb_after_first_pose\": %llu, \"rss_kb_after_warmup\": %llu, "
         "\"warmup_poses\": %llu, \"rss_kb_end\": %llu, \"rss_growth_kb\": %lld, "
-        "\"peak_rss_kb\": %llu}\n",
+        "\"peak_rss_kb\": %llu%s}\n",
         static_cast<unsigned long long>(ctx.end.allocations - ctx.steady.allocations),
         ctx.counter_covers_malloc ? "true" : "false",
         static_cast<unsigned long long>(ctx.steady.rss_kb),
@@ -132,11 +149,11 @@ Status write_timing_report(const char* json_path, const TimingRecord* records, s
         static_cast<unsigned long long>(ctx.warm.valid ? ctx.warmup_poses : 1),
         static_cast<unsigned long long>(ctx.end.rss_kb),
         static_cast<long long>(ctx.end.rss_kb) - static_cast<long long>(from.rss_kb),
-        static_cast<unsigned long long>(ctx.peak_rss_kb));
+        static_cast<unsigned long long>(ctx.peak_rss_kb), budget_json(ctx.budget).c_str());
   } else {
-    std::fprintf(f,
-                 "  \"memory\": {\"allocations_after_first_pose\": null, \"peak_rss_kb\": %llu}\n",
-                 static_cast<unsigned long long>(ctx.peak_rss_kb));
+    std::fprintf(
+        f, "  \"memory\": {\"allocations_after_first_pose\": null, \"peak_rss_kb\": %llu%s}\n",
+        static_cast<unsigned long long>(ctx.peak_rss_kb), budget_json(ctx.budget).c_str());
   }
   std::fprintf(f, "}\n");
   const bool json_ok = std::fclose(f) == 0;

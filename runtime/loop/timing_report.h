@@ -15,6 +15,7 @@ namespace aprt {
 
 struct TimingRecord;
 struct RunStats;
+struct MemoryBudget;
 
 // Process memory and allocation figures sampled by the supervisor.
 struct MemorySample {
@@ -37,6 +38,7 @@ struct TimingContext {
   uint64_t warmup_poses = 0;
   MemorySample end;  // after the last
   uint64_t peak_rss_kb = 0;
+  const MemoryBudget* budget = nullptr;  // where the memory is, or null
   double duration_s = 0;
 };
 

@@ -1,10 +1,12 @@
 #include "runtime/engine/engine.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "runtime/base/allocation_counter.h"
@@ -110,7 +112,105 @@ TEST(Engine, ReportsMemoryPlan) {
   EXPECT_GT(m.arena_bytes, 0u);
   EXPECT_LE(m.arena_bytes, m.arena_sum_bytes);
   EXPECT_GE(m.arena_bytes, m.arena_lower_bound_bytes);
-  EXPECT_EQ(m.total_bytes, m.image_bytes + m.packed_bytes + m.arena_bytes + m.scratch_bytes);
+  EXPECT_EQ(m.total_bytes,
+            m.tables_bytes + m.kept_bytes + m.packed_bytes + m.arena_bytes + m.scratch_bytes);
+}
+
+// One copy of the weights: the caller's bytes are not referenced after load
+// (overwriting them changes nothing), each constant is either kept or packed,
+// and names survive the move of the tables.
+TEST(Engine, KeepsOneCopyOfTheWeightsAndNothingOfTheCallersBytes) {
+  for (const char* isa : {"ref", "auto"}) {
+    SCOPED_TRACE(isa);
+    auto b = test::make_small_model();
+    EngineOptions opt;
+    opt.isa = isa;
+    auto loaded = Engine::load_memory(b.data(), b.size(), opt);
+    ASSERT_TRUE(loaded) << loaded.error().message();
+    Engine& e = **loaded;
+    fill_input(e);
+    ASSERT_TRUE(e.run());
+    float before[7];
+    std::memcpy(before, e.output().f32(), sizeof before);
+    const std::string first_op = e.op(0).name;
+    std::memset(b.data(), 0xA5, b.size());
+    fill_input(e);
+    ASSERT_TRUE(e.run());
+    EXPECT_EQ(std::memcmp(before, e.output().f32(), sizeof before), 0);
+    EXPECT_EQ(first_op, e.op(0).name);
+    const MemoryReport& m = e.memory();
+    size_t kept = 0, released = 0;
+    for (size_t i = 0; i < e.tensor_count(); ++i) {
+      const Tensor& t = e.tensor(i);
+      if (!t.is_const()) continue;
+      if (t.data) {
+        ++kept;
+        const auto* p = static_cast<const uint8_t*>(t.data);
+        EXPECT_TRUE(p < b.data() || p >= b.data() + b.size()) << t.name;
+      } else {
+        ++released;
+      }
+    }
+    EXPECT_EQ(kept, m.kept_count);
+    EXPECT_LT(m.tables_bytes, m.file_bytes - m.weight_bytes + 64);
+    if (std::strcmp(e.isa(), "ref") == 0) {
+      EXPECT_EQ(released, 0u);  // the reference kernels read every weight as stored
+    } else {
+      EXPECT_GT(released, 0u);
+      EXPECT_LT(m.kept_bytes, m.weight_bytes);
+    }
+  }
+}
+
+TEST(Engine, LoadFileMatchesLoadMemory) {
+  const auto b = test::make_small_model();
+  char path[] = "/tmp/aprt_engine_test_XXXXXX";
+  const int fd = mkstemp(path);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(write(fd, b.data(), b.size()), long(b.size()));
+  close(fd);
+  auto from_file = Engine::load_file(path);
+  unlink(path);
+  ASSERT_TRUE(from_file) << from_file.error().message();
+  auto from_memory = Engine::load_memory(b.data(), b.size());
+  ASSERT_TRUE(from_memory);
+  fill_input(**from_file);
+  fill_input(**from_memory);
+  ASSERT_TRUE((*from_file)->run());
+  ASSERT_TRUE((*from_memory)->run());
+  EXPECT_EQ(std::memcmp((*from_file)->output().f32(), (*from_memory)->output().f32(), 7 * 4), 0);
+  EXPECT_EQ((*from_file)->memory().total_bytes, (*from_memory)->memory().total_bytes);
+}
+
+TEST(Engine, LoadFileRefusesACorruptFile) {
+  auto b = test::make_small_model();
+  b[b.size() - 3] ^= 0x40;  // in the weights, the last section
+  char path[] = "/tmp/aprt_engine_test_XXXXXX";
+  const int fd = mkstemp(path);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(write(fd, b.data(), b.size()), long(b.size()));
+  close(fd);
+  auto e = Engine::load_file(path);
+  unlink(path);
+  ASSERT_FALSE(e);
+  EXPECT_EQ(e.error().code(), Errc::kChecksum);
+  EXPECT_NE(std::strstr(e.error().message(), "WEIGHTS checksum mismatch"), nullptr)
+      << e.error().message();
+}
+
+TEST(Engine, LoadFileRefusesATruncatedFile) {
+  auto b = test::make_small_model();
+  b.resize(b.size() / 2);
+  char path[] = "/tmp/aprt_engine_test_XXXXXX";
+  const int fd = mkstemp(path);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(write(fd, b.data(), b.size()), long(b.size()));
+  close(fd);
+  auto e = Engine::load_file(path);
+  unlink(path);
+  ASSERT_FALSE(e);
+  EXPECT_EQ(e.error().code(), Errc::kTruncated);
+  EXPECT_NE(std::strstr(e.error().message(), "truncated"), nullptr) << e.error().message();
 }
 
 TEST(Engine, LoadFileReportsMissingFile) {

@@ -130,6 +130,8 @@ Status prepare(OpNode& node, bool depthwise) {
     } else {
       node.packed_floats = size_t(co) * kh * kw * ci;
       node.pack = pack_conv2d;
+      node.packed_inputs = 1u << 1;
+      node.packed_layout = "f32 conv filters [kh][kw][ci][co]";
       node.eval = eval_conv2d_fast;
     }
   } else {

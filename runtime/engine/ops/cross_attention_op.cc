@@ -200,6 +200,9 @@ Status prepare_cross_attention_1q(OpNode& node) {
                &s.z_panels);
     node.packed_floats = kernels::f32_pack_b_floats(e, e, node.ks->gemm_nr);
     node.pack = pack_wv;
+    node.packed_inputs = 1u << 5;
+    node.packed_layout = "f32 GEMM weight panels [n/nr][k][nr]";
+    node.packed_tile = node.ks->gemm_nr;
     node.eval = eval_cross_fast;
     node.kernel = node.ks->isa;
   } else {

@@ -110,6 +110,9 @@ Status prepare_linear(OpNode& node) {
                &s.panels);
     node.packed_floats = kernels::f32_pack_b_floats(n, k, node.ks->gemm_nr);
     node.pack = pack_linear;
+    node.packed_inputs = 1u << 1;
+    node.packed_layout = "f32 GEMM weight panels [n/nr][k][nr]";
+    node.packed_tile = node.ks->gemm_nr;
     node.eval = eval_linear_fast;
     node.kernel = node.ks->isa;
   } else {

@@ -94,10 +94,13 @@ Status prepare_qdwconv2d(OpNode& node, kernels::Conv2dShape shape, Split rows) {
   node.pack = pack_qdwconv;
   if (node.qks) {
     node.packed_floats = s.w_at + floats_for_bytes(w->numel * 4);
+    node.packed_inputs = 1u << 1;
+    node.packed_layout = "f32 scales + depthwise filters as f32";
     node.eval = eval_qdwconv_fast;
     node.kernel = node.qks->isa;
   } else {
     node.packed_floats = s.w_at;
+    node.packed_layout = "f32 output scales";
     node.eval = eval_qdwconv_ref;
     node.kernel = "ref-int8";
   }

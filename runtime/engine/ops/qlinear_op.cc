@@ -208,10 +208,14 @@ Status prepare_qlinear(OpNode& node) {
     s.qrows = make_split(s.shape.m, 16, node.threads);
     node.packed_floats = s.weights_at + floats_for_bytes(kernels::qs8_pack_w_bytes(
                                             n, k, node.qks->nr, node.qks->kgroup));
+    node.packed_inputs = 1u << 1;
+    node.packed_layout = "f32 scales + s32 column sums + s8 weight panels [n/nr][k/g][nr][g]";
+    node.packed_tile = node.qks->nr;
     node.eval = eval_qlinear_fast;
     node.kernel = node.qks->isa;
   } else {
     node.packed_floats = s.colsum_at;  // mult only
+    node.packed_layout = "f32 output scales";
     node.eval = eval_qlinear_ref;
     node.kernel = "ref-int8";
   }

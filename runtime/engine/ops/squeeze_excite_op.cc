@@ -88,6 +88,8 @@ Status prepare_squeeze_excite(OpNode& node) {
     node.scratch_floats = size_t(2 * c + cr);
     node.packed_floats = size_t(c) * cr;
     node.pack = pack_se;
+    node.packed_inputs = 1u << 3;
+    node.packed_layout = "f32 expand weights transposed [cr][c]";
     node.eval = eval_se_fast;
     node.kernel = node.ks->isa;
   } else {
