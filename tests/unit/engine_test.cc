@@ -116,6 +116,16 @@ TEST(Engine, ReportsMemoryPlan) {
             m.tables_bytes + m.kept_bytes + m.packed_bytes + m.arena_bytes + m.scratch_bytes);
 }
 
+// The bytes in a new temporary file; its path, or empty on failure.
+std::string write_temp_file(const std::vector<uint8_t>& bytes) {
+  char path[] = "/tmp/aprt_engine_test_XXXXXX";
+  const int fd = mkstemp(path);
+  if (fd < 0) return "";
+  const bool ok = write(fd, bytes.data(), bytes.size()) == long(bytes.size());
+  close(fd);
+  return ok ? path : "";
+}
+
 // One copy of the weights: the caller's bytes are not referenced after load
 // (overwriting them changes nothing), each constant is either kept or packed,
 // and names survive the move of the tables.
@@ -164,13 +174,10 @@ TEST(Engine, KeepsOneCopyOfTheWeightsAndNothingOfTheCallersBytes) {
 
 TEST(Engine, LoadFileMatchesLoadMemory) {
   const auto b = test::make_small_model();
-  char path[] = "/tmp/aprt_engine_test_XXXXXX";
-  const int fd = mkstemp(path);
-  ASSERT_GE(fd, 0);
-  ASSERT_EQ(write(fd, b.data(), b.size()), long(b.size()));
-  close(fd);
-  auto from_file = Engine::load_file(path);
-  unlink(path);
+  const std::string path = write_temp_file(b);
+  ASSERT_FALSE(path.empty());
+  auto from_file = Engine::load_file(path.c_str());
+  unlink(path.c_str());
   ASSERT_TRUE(from_file) << from_file.error().message();
   auto from_memory = Engine::load_memory(b.data(), b.size());
   ASSERT_TRUE(from_memory);
@@ -185,13 +192,10 @@ TEST(Engine, LoadFileMatchesLoadMemory) {
 TEST(Engine, LoadFileRefusesACorruptFile) {
   auto b = test::make_small_model();
   b[b.size() - 3] ^= 0x40;  // in the weights, the last section
-  char path[] = "/tmp/aprt_engine_test_XXXXXX";
-  const int fd = mkstemp(path);
-  ASSERT_GE(fd, 0);
-  ASSERT_EQ(write(fd, b.data(), b.size()), long(b.size()));
-  close(fd);
-  auto e = Engine::load_file(path);
-  unlink(path);
+  const std::string path = write_temp_file(b);
+  ASSERT_FALSE(path.empty());
+  auto e = Engine::load_file(path.c_str());
+  unlink(path.c_str());
   ASSERT_FALSE(e);
   EXPECT_EQ(e.error().code(), Errc::kChecksum);
   EXPECT_NE(std::strstr(e.error().message(), "WEIGHTS checksum mismatch"), nullptr)
@@ -201,13 +205,10 @@ TEST(Engine, LoadFileRefusesACorruptFile) {
 TEST(Engine, LoadFileRefusesATruncatedFile) {
   auto b = test::make_small_model();
   b.resize(b.size() / 2);
-  char path[] = "/tmp/aprt_engine_test_XXXXXX";
-  const int fd = mkstemp(path);
-  ASSERT_GE(fd, 0);
-  ASSERT_EQ(write(fd, b.data(), b.size()), long(b.size()));
-  close(fd);
-  auto e = Engine::load_file(path);
-  unlink(path);
+  const std::string path = write_temp_file(b);
+  ASSERT_FALSE(path.empty());
+  auto e = Engine::load_file(path.c_str());
+  unlink(path.c_str());
   ASSERT_FALSE(e);
   EXPECT_EQ(e.error().code(), Errc::kTruncated);
   EXPECT_NE(std::strstr(e.error().message(), "truncated"), nullptr) << e.error().message();
