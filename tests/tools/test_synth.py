@@ -180,6 +180,13 @@ class TrainOnDrives(unittest.TestCase):
             self.assertEqual(cfg["extra"]["data"], "day,noon")
             self.assertEqual(cfg["extra"]["validation"], "val")
             self.assertTrue(all(np.isfinite(cfg["extra"]["val_error"])))
+            # The run exports its best validation point (best.pth), which the
+            # model's recorded error is.
+            best = torch.load(os.path.join(d, "run", "best.pth"), map_location="cpu")
+            rows = json.loads(read(os.path.join(d, "run", "train_log.json")))
+            self.assertEqual(best["val_pos_median"], min(r["val_pos_median"] for r in rows))
+            self.assertEqual(cfg["extra"]["val_error"][0], best["val_pos_median"])
+            self.assertTrue(any("best validation point" in line for line in logs), logs)
             # A second phase from the checkpoint keeps the configuration and the bounds.
             logs = []
             train([os.path.join(d, "noon")], os.path.join(d, "phase2"), minutes=0.02, batch=4,

@@ -149,12 +149,21 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
                 modality=modality, out=out, folders=folders, val=val, tr=tr,
                 threads=max(1, threads // workers))
     data = (imgs, pos_n, quat, v_imgs, v_pos, v_quat)
+    stale = os.path.join(out, "best.pth")
+    if os.path.exists(stale):  # an earlier run's into the same folder
+        os.remove(stale)
     if workers == 1:
         _fit(0, 1, plan, data, model, loss_fn, log)
     else:
         _fit_in_workers(workers, plan, data, model, loss_fn)
-    # What the last epoch saved: the weights, or their average with --ema.
-    final = torch.load(os.path.join(out, "checkpoint.pth"), map_location="cpu")
+    # The best validation point's weights (or their average with --ema);
+    # checkpoint.pth keeps the last, to continue from.
+    best = os.path.join(out, "best.pth")
+    final = torch.load(best if os.path.exists(best) else os.path.join(out, "checkpoint.pth"),
+                       map_location="cpu")
+    if "epoch" in final:
+        log(f"train: exporting the best validation point: epoch {final['epoch']}, "
+            f"median {final['val_pos_median']:.2f} m")
     model.load_state_dict(final["model_state_dict"])
     cfg.dropout = 0.0
     return model, cfg
@@ -336,6 +345,13 @@ def _fit(rank: int, world: int, plan: dict, data: tuple, model, loss_fn, log):
                 saved["train_state_dict"] = model.state_dict()
             torch.save(saved, os.path.join(out, "checkpoint.pth.tmp"))
             os.replace(os.path.join(out, "checkpoint.pth.tmp"), os.path.join(out, "checkpoint.pth"))
+            # The best validation point so far is what the run exports: the
+            # last one can be worse (the average still moving as the rate decays).
+            if row["val_pos_median"] <= min(r["val_pos_median"] for r in log_rows):
+                saved["epoch"] = epoch
+                saved["val_pos_median"] = row["val_pos_median"]
+                torch.save(saved, os.path.join(out, "best.pth.tmp"))
+                os.replace(os.path.join(out, "best.pth.tmp"), os.path.join(out, "best.pth"))
             # Written every epoch: an interrupted run is still exportable
             # (python3 -m aprt_tools export --config-json OUT/model.json --weights
             # OUT/checkpoint.pth -o OUT/model.onnx, then convert).
@@ -365,7 +381,8 @@ def _ema_update(averaged: nn.Module, model: nn.Module, decay: float, step: int):
 def _write_config(out, cfg, log_rows, start, tr, epoch, step, folders, val):
     final = AprConfig.from_json(cfg.to_json())
     final.dropout = 0.0
-    final.extra = dict(val_error=[log_rows[-1]["val_pos_median"], log_rows[-1]["val_rot_median"]],
+    best = min(log_rows, key=lambda r: r["val_pos_median"])  # what best.pth holds
+    final.extra = dict(val_error=[best["val_pos_median"], best["val_rot_median"]],
                        train_minutes=(time.time() - start) / 60, train_frames=int(len(tr)),
                        epochs=epoch, steps=step,
                        data=",".join(os.path.basename(os.path.abspath(f)) for f in folders),
