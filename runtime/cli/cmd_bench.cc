@@ -12,6 +12,7 @@
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
 #include "runtime/engine/engine.h"
+#include "runtime/loop/timing_report.h"
 
 namespace aprt::cli {
 namespace {
@@ -72,6 +73,9 @@ int cmd_bench(int argc, char** argv) {
   opts.isa = isa;
   // Start-up: the load (read, checks, repacking, the block prefaulted and
   // locked) and the first run after it, as a process's first frame sees them.
+  // What the process held before the model (the program and its libraries),
+  // so that the load's own peak reads as peak_rss_kb - rss_before_load_kb.
+  const uint64_t rss_before_kb = current_rss_kb();
   const double load_t0 = now_ms();
   auto loaded = Engine::load_file(path, opts);
   const double load_ms = now_ms() - load_t0;
@@ -121,12 +125,14 @@ int cmd_bench(int argc, char** argv) {
         "\"allocations_cover_malloc\": %s, \"arena_bytes\": %zu, \"weight_bytes\": %zu, "
         "\"scratch_bytes\": %zu, \"total_bytes\": %zu, \"memory_locked\": %s, "
         "\"peak_rss_kb\": %ld, \"gflop_per_frame\": %.4f, \"gflops\": %.3f, \"threads\": %d, "
-        "\"isa\": \"%s\", \"load_ms\": %.3f, \"first_run_ms\": %.3f, \"ms\": [",
+        "\"isa\": \"%s\", \"load_ms\": %.3f, \"first_run_ms\": %.3f, "
+        "\"rss_before_load_kb\": %llu, \"ms\": [",
         path, runs, warmup, sorted.front(), med, p99, p999, sorted.back(),
         static_cast<unsigned long long>(allocs),
         allocation_counter_covers_malloc() ? "true" : "false", r.arena_bytes, r.weight_bytes,
         r.scratch_bytes, r.total_bytes, r.locked ? "true" : "false", peak_rss_kb(), gflops,
-        gflops / (med / 1e3), e.threads(), e.isa(), load_ms, first_ms);
+        gflops / (med / 1e3), e.threads(), e.isa(), load_ms, first_ms,
+        static_cast<unsigned long long>(rss_before_kb));
     for (size_t i = 0; i < ms.size(); ++i) std::printf("%s%.4f", i ? ", " : "", ms[i]);
     std::printf("]}\n");
   } else {
@@ -144,10 +150,10 @@ int cmd_bench(int argc, char** argv) {
                 allocation_counter_covers_malloc() ? "" : " (operator new only: sanitizer build)");
     std::printf(
         "memory       arena %.3f MB, weights %.2f MB, scratch %.3f MB, total %.2f MB%s; "
-        "peak RSS %.1f MB\n",
+        "peak RSS %.1f MB (%.1f MB before the load)\n",
         double(r.arena_bytes) / 1e6, double(r.weight_bytes) / 1e6, double(r.scratch_bytes) / 1e6,
         double(r.total_bytes) / 1e6, r.locked ? " (locked)" : " (not locked: raise ulimit -l)",
-        double(peak_rss_kb()) / 1e3);
+        double(peak_rss_kb()) * 1.024 / 1e3, double(rss_before_kb) * 1.024 / 1e3);
   }
   if (profile && !json) {
     std::vector<size_t> order(e.op_count());
