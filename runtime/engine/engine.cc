@@ -456,18 +456,20 @@ Status Engine::place_constants(uint8_t* tables, uint8_t* kept, const Source& sou
   return ok();
 }
 
-Expected<std::vector<uint8_t>> Engine::read_model_file(const char* path) {
-  // Never blocks on what is not a file (a FIFO, a device: refused at open),
-  // and reads the header before the body: a large file that is no model, or
-  // whose header disagrees with its size, is refused after 64 bytes.
+namespace {
+
+// A model file opened and its header read: never blocks on what is not a file
+// (a FIFO, a device: refused at open), and a large file that is no model, or
+// whose header disagrees with its size, is refused after 64 bytes. `got`:
+// the header bytes read (fewer only for a file shorter than the header).
+Expected<InputFile> open_model_file(const char* path, uint8_t (&head)[format::kHeaderBytes],
+                                    long* got) {
   auto f = open_input_file(path, kMaxModelFileBytes, "model_bin");
   if (!f) return f.error();
   const uint64_t size = f->size();
-  uint8_t head[format::kHeaderBytes];
-  const long got_head = f->read(head, size < sizeof head ? size_t(size) : sizeof head);
-  APRT_ENSURE(got_head >= 0, Errc::kIo, "model_bin: cannot read '%s': %s", path,
-              std::strerror(errno));
-  APRT_ENSURE(uint64_t(got_head) == size || got_head == long(sizeof head), Errc::kIo,
+  *got = f->read(head, size < sizeof head ? size_t(size) : sizeof head);
+  APRT_ENSURE(*got >= 0, Errc::kIo, "model_bin: cannot read '%s': %s", path, std::strerror(errno));
+  APRT_ENSURE(uint64_t(*got) == size || *got == long(sizeof head), Errc::kIo,
               "model_bin: short read on '%s'", path);
   APRT_ENSURE(size >= 8 && std::memcmp(head, format::kMagic, 8) == 0, Errc::kBadMagic,
               "model_bin: '%s' is not an aprt model file (bad magic)", path);
@@ -479,6 +481,17 @@ Expected<std::vector<uint8_t>> Engine::read_model_file(const char* path) {
                 static_cast<unsigned long long>(declared), static_cast<unsigned long long>(size),
                 declared > size ? "file truncated?" : "trailing data?");
   }
+  return f;
+}
+
+}  // namespace
+
+Expected<std::vector<uint8_t>> Engine::read_model_file(const char* path) {
+  uint8_t head[format::kHeaderBytes];
+  long got_head = 0;
+  auto f = open_model_file(path, head, &got_head);
+  if (!f) return f.error();
+  const uint64_t size = f->size();
   std::vector<uint8_t> bytes;
   bytes.resize(size_t(size));
   std::memcpy(bytes.data(), head, size_t(got_head));
@@ -492,18 +505,15 @@ Expected<std::vector<uint8_t>> Engine::read_model_file(const char* path) {
 
 Expected<std::unique_ptr<Engine>> Engine::load_file(const char* path,
                                                     const EngineOptions& options) {
-  // The same checks as read_model_file() up to the body; then the tables are
+  // The file's header checked as read_model_file() does; then the tables are
   // read into a reservation the size of the file (untouched pages cost no
   // memory) and the weights from the file as load_image() places them. No
   // mapping of the file: one truncated while it loads is a read error, not SIGBUS.
-  auto f = open_input_file(path, kMaxModelFileBytes, "model_bin");
+  uint8_t head[format::kHeaderBytes] = {};
+  long got = 0;
+  auto f = open_model_file(path, head, &got);
   if (!f) return f.error();
   const uint64_t size = f->size();
-  uint8_t head[format::kHeaderBytes] = {};
-  const long got = f->read(head, size < sizeof head ? size_t(size) : sizeof head);
-  APRT_ENSURE(got >= 0, Errc::kIo, "model_bin: cannot read '%s': %s", path, std::strerror(errno));
-  APRT_ENSURE(size >= 8 && std::memcmp(head, format::kMagic, 8) == 0, Errc::kBadMagic,
-              "model_bin: '%s' is not an aprt model file (bad magic)", path);
   void* map = mmap(nullptr, size_t(size), PROT_READ | PROT_WRITE,
                    MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
   APRT_ENSURE(map != MAP_FAILED, Errc::kOutOfMemory, "model_bin: cannot reserve %llu bytes: %s",

@@ -58,7 +58,7 @@ void add(const Mapping& m, const void* block, size_t block_bytes, size_t stack_b
   b->locked_kb += m.locked_kb;
   const auto at = reinterpret_cast<uintptr_t>(block);
   const size_t size = m.end - m.begin;
-  if (block && m.begin <= at && at < m.end) {
+  if (block && m.begin < at + block_bytes && at < m.end) {  // the block, in one mapping or more
     b->engine_kb += m.rss_kb;
   } else if (m.file) {
     b->code_kb += m.rss_kb;
@@ -70,7 +70,6 @@ void add(const Mapping& m, const void* block, size_t block_bytes, size_t stack_b
   } else {
     b->other_kb += m.rss_kb;
   }
-  (void)block_bytes;
 }
 
 // A header line: "begin-end perms offset dev inode [path]".
