@@ -116,14 +116,17 @@ TEST(Engine, ReportsMemoryPlan) {
             m.tables_bytes + m.kept_bytes + m.packed_bytes + m.arena_bytes + m.scratch_bytes);
 }
 
-// The bytes in a new temporary file; its path, or empty on failure.
-std::string write_temp_file(const std::vector<uint8_t>& bytes) {
+// The bytes loaded through Engine::load_file from a temporary file.
+Expected<std::unique_ptr<Engine>> load_via_file(const std::vector<uint8_t>& bytes) {
   char path[] = "/tmp/aprt_engine_test_XXXXXX";
   const int fd = mkstemp(path);
-  if (fd < 0) return "";
-  const bool ok = write(fd, bytes.data(), bytes.size()) == long(bytes.size());
+  if (fd < 0) return Error(Errc::kIo, "mkstemp failed");
+  const bool written = write(fd, bytes.data(), bytes.size()) == long(bytes.size());
   close(fd);
-  return ok ? path : "";
+  auto e = written ? Engine::load_file(path)
+                   : Expected<std::unique_ptr<Engine>>(Error(Errc::kIo, "write failed"));
+  unlink(path);
+  return e;
 }
 
 // One copy of the weights: the caller's bytes are not referenced after load
@@ -174,10 +177,7 @@ TEST(Engine, KeepsOneCopyOfTheWeightsAndNothingOfTheCallersBytes) {
 
 TEST(Engine, LoadFileMatchesLoadMemory) {
   const auto b = test::make_small_model();
-  const std::string path = write_temp_file(b);
-  ASSERT_FALSE(path.empty());
-  auto from_file = Engine::load_file(path.c_str());
-  unlink(path.c_str());
+  auto from_file = load_via_file(b);
   ASSERT_TRUE(from_file) << from_file.error().message();
   auto from_memory = Engine::load_memory(b.data(), b.size());
   ASSERT_TRUE(from_memory);
@@ -192,10 +192,7 @@ TEST(Engine, LoadFileMatchesLoadMemory) {
 TEST(Engine, LoadFileRefusesACorruptFile) {
   auto b = test::make_small_model();
   b[b.size() - 3] ^= 0x40;  // in the weights, the last section
-  const std::string path = write_temp_file(b);
-  ASSERT_FALSE(path.empty());
-  auto e = Engine::load_file(path.c_str());
-  unlink(path.c_str());
+  auto e = load_via_file(b);
   ASSERT_FALSE(e);
   EXPECT_EQ(e.error().code(), Errc::kChecksum);
   EXPECT_NE(std::strstr(e.error().message(), "WEIGHTS checksum mismatch"), nullptr)
@@ -205,10 +202,7 @@ TEST(Engine, LoadFileRefusesACorruptFile) {
 TEST(Engine, LoadFileRefusesATruncatedFile) {
   auto b = test::make_small_model();
   b.resize(b.size() / 2);
-  const std::string path = write_temp_file(b);
-  ASSERT_FALSE(path.empty());
-  auto e = Engine::load_file(path.c_str());
-  unlink(path.c_str());
+  auto e = load_via_file(b);
   ASSERT_FALSE(e);
   EXPECT_EQ(e.error().code(), Errc::kTruncated);
   EXPECT_NE(std::strstr(e.error().message(), "truncated"), nullptr) << e.error().message();
