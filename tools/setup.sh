@@ -12,6 +12,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev clang clang-format libclang-rt-14-dev
   # runtime libraries: YAML configuration, PNG/JPEG replay, pose geometry, DDS, model signatures
   libyaml-dev libpng-dev libjpeg-dev libeigen3-dev cyclonedds-dev cyclonedds-tools libsodium-dev libcamera-dev libcamera-ipa
+  # the Fast DDS peer of the tests (ROS 2's default middleware; tests/peers)
+  libfastrtps-dev fastddsgen default-jre-headless util-linux
   # CAN tools (cansend/candump, for the HIL rig and by hand)
   can-utils
   # worst-case timing runs under CPU load (docs/timing.md)

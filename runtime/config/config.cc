@@ -83,7 +83,8 @@ Status read_source(Reader& r, const Node* src, const std::string& path, Config::
   TRY(r.boolean(rp, join(path, "replay"), "loop", &src_out->replay.loop));
   TRY(r.integer(rp, join(path, "replay"), "frames", 0, 1000000000, &src_out->replay.frames));
   const Node* v = src ? src->get("v4l2") : nullptr;
-  TRY(r.map(v, join(path, "v4l2"), {"device", "width", "height", "format", "fps", "buffers"}));
+  TRY(r.map(v, join(path, "v4l2"),
+            {"device", "width", "height", "format", "fps", "buffers", "frames"}));
   TRY(r.str(v, join(path, "v4l2"), "device", &src_out->v4l2.device));
   TRY(r.integer(v, join(path, "v4l2"), "width", 16, 8192, &src_out->v4l2.width));
   TRY(r.integer(v, join(path, "v4l2"), "height", 16, 8192, &src_out->v4l2.height));
@@ -91,9 +92,10 @@ Status read_source(Reader& r, const Node* src, const std::string& path, Config::
             {"YUYV", "UYVY", "NV12", "RGB24", "BGR24", "MJPEG"}));
   TRY(r.integer(v, join(path, "v4l2"), "fps", 1, 1000, &src_out->v4l2.fps));
   TRY(r.integer(v, join(path, "v4l2"), "buffers", 2, 32, &src_out->v4l2.buffers));
+  TRY(r.integer(v, join(path, "v4l2"), "frames", 0, 1000000000, &src_out->v4l2.frames));
   const Node* lc = src ? src->get("libcamera") : nullptr;
   const std::string lp = join(path, "libcamera");
-  TRY(r.map(lc, lp, {"camera", "width", "height", "format", "role", "fps", "buffers"}));
+  TRY(r.map(lc, lp, {"camera", "width", "height", "format", "role", "fps", "buffers", "frames"}));
   TRY(r.integer(lc, lp, "fps", 1, 1000, &src_out->libcamera.fps));
   TRY(r.str(lc, lp, "camera", &src_out->libcamera.camera));
   TRY(r.integer(lc, lp, "width", 16, 8192, &src_out->libcamera.width));
@@ -102,14 +104,16 @@ Status read_source(Reader& r, const Node* src, const std::string& path, Config::
             {"YUYV", "UYVY", "NV12", "RGB24", "BGR24", "MJPEG"}));
   TRY(r.str(lc, lp, "role", &src_out->libcamera.role, {"viewfinder", "video", "still"}));
   TRY(r.integer(lc, lp, "buffers", 2, 32, &src_out->libcamera.buffers));
+  TRY(r.integer(lc, lp, "frames", 0, 1000000000, &src_out->libcamera.frames));
   const Node* pc = src ? src->get("pointcloud2") : nullptr;
   const std::string pp = join(path, "pointcloud2");
-  TRY(r.map(pc, pp, {"topic", "domain", "reliable", "depth", "loopback_only"}));
+  TRY(r.map(pc, pp, {"topic", "domain", "reliable", "depth", "loopback_only", "frames"}));
   TRY(r.str(pc, pp, "topic", &src_out->pointcloud2.topic));
   TRY(r.integer(pc, pp, "domain", 0, 232, &src_out->pointcloud2.domain));
   TRY(r.boolean(pc, pp, "reliable", &src_out->pointcloud2.reliable));
   TRY(r.integer(pc, pp, "depth", 1, 100, &src_out->pointcloud2.depth));
   TRY(r.boolean(pc, pp, "loopback_only", &src_out->pointcloud2.loopback_only));
+  TRY(r.integer(pc, pp, "frames", 0, 1000000000, &src_out->pointcloud2.frames));
   const Node* li = src ? src->get("lidar") : nullptr;
   const std::string lip = join(path, "lidar");
   TRY(r.map(li, lip, {"max_points", "region", "min_points"}));
@@ -280,7 +284,7 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     const Node* dds = out ? out->get("dds") : nullptr;
     APRT_TRY(r.map(dds, "output.dds",
                    {"enabled", "domain", "pose_topic", "diagnostics_topic", "reliability", "depth",
-                    "loopback_only"}));
+                    "loopback_only", "discovery_wait_ms"}));
     APRT_TRY(r.boolean(dds, "output.dds", "enabled", &c.output.dds.enabled));
     APRT_TRY(r.integer(dds, "output.dds", "domain", 0, 232, &c.output.dds.domain));
     APRT_TRY(r.str(dds, "output.dds", "pose_topic", &c.output.dds.pose_topic));
@@ -289,6 +293,8 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
                    {"reliable", "best_effort"}));
     APRT_TRY(r.integer(dds, "output.dds", "depth", 1, 1000, &c.output.dds.depth));
     APRT_TRY(r.boolean(dds, "output.dds", "loopback_only", &c.output.dds.loopback_only));
+    APRT_TRY(r.integer(dds, "output.dds", "discovery_wait_ms", 0, 10000,
+                       &c.output.dds.discovery_wait_ms));
     const Node* can = out ? out->get("can") : nullptr;
     APRT_TRY(
         r.map(can, "output.can", {"enabled", "interface", "fd", "cycle_ms", "recover_ms", "ids"}));

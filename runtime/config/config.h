@@ -59,6 +59,7 @@ struct Config {
       std::string format = "YUYV";
       int fps = 30;
       int buffers = 4;
+      int frames = 0;  // stop after this many frames (0: run until stopped)
     } v4l2;
     struct Libcamera {
       std::string camera;  // id or index; empty: the first camera
@@ -67,6 +68,7 @@ struct Config {
       std::string role = "viewfinder";  // viewfinder | video | still
       int fps = 30;
       int buffers = 4;
+      int frames = 0;  // stop after this many frames (0: run until stopped)
     } libcamera;
     struct PointCloud2 {                  // sensor_msgs/msg/PointCloud2 over DDS
                                           // (drivers/input/pointcloud2/pointcloud2_reader.h)
@@ -75,6 +77,7 @@ struct Config {
       bool reliable = false;  // ROS 2 sensor-data QoS: best effort
       int depth = 5;
       bool loopback_only = false;
+      int frames = 0;  // stop after this many scans (0: run until stopped)
     } pointcloud2;
     struct Lidar {              // every LiDAR source: the point buffer and its gate
       int max_points = 200000;  // more in one scan are dropped and counted
@@ -127,6 +130,7 @@ struct Config {
       std::string reliability = "reliable";  // reliable | best_effort
       int depth = 10;
       bool loopback_only = false;
+      int discovery_wait_ms = 1500;  // before the first pose: peers' endpoints known
     } dds;
     struct Can {
       bool enabled = false;

@@ -33,6 +33,10 @@ Expected<std::unique_ptr<CaptureChannel>> open_channel(const Config::Camera& cam
                  opened.error().message());
   }
   *frames = opened->frames;
+  ch->frame_limit = src.type == SourceType::kV4l2          ? uint64_t(src.v4l2.frames)
+                    : src.type == SourceType::kLibcamera   ? uint64_t(src.libcamera.frames)
+                    : src.type == SourceType::kPointCloud2 ? uint64_t(src.pointcloud2.frames)
+                                                           : 0;
   ch->source = std::move(opened->source);
   auto slot = FrameSlot::create(ch->source->max_frame_bytes());
   if (!slot) return slot.error();
@@ -90,6 +94,10 @@ void* capture_thread(void* channel) {
         }
         if (c.failed.exchange(false, std::memory_order_acq_rel)) {
           std::fprintf(stderr, "aprt run: %s delivers frames again\n", c.source->name());
+        }
+        if (c.frame_limit != 0 && n + 1 >= c.frame_limit) {  // a bounded device run: done
+          c.done.store(true, std::memory_order_release);
+          return nullptr;
         }
         break;
       }

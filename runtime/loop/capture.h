@@ -34,6 +34,7 @@ struct CaptureChannel {
   std::atomic<bool> done{false}, failed{false};
   std::atomic<int64_t> beat{0};
   std::atomic<uint64_t> captured{0};
+  uint64_t frame_limit = 0;  // a device's `frames`: done after this many (0: no limit)
   // inference thread only
   uint64_t missing = 0, flagged = 0, outliers = 0;
   pthread_t thread{};

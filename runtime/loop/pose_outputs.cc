@@ -64,9 +64,22 @@ Expected<std::unique_ptr<PoseOutputs>> PoseOutputs::create(const Config& config,
     d.reliable = c.dds.reliability == "reliable";
     d.depth = c.dds.depth;
     d.loopback_only = c.dds.loopback_only;
+    d.discovery_wait_ms = c.dds.discovery_wait_ms;
     auto p = DdsPublisher::create(d);
     if (p) {
       o->dds_ = std::move(p.value());
+      const DdsDiscoveryReport& f = o->dds_->discovery();
+      if (f.pending > 0) {
+        std::fprintf(stderr,
+                     "aprt run: dds: %d of %d participants on domain %d told no endpoint within "
+                     "discovery_wait_ms %d; their readers may miss the first poses\n",
+                     f.pending, f.participants, c.dds.domain, c.dds.discovery_wait_ms);
+      } else if (c.dds.discovery_wait_ms > 0) {
+        std::fprintf(
+            stderr, "aprt run: dds: %d participant%s on domain %d, endpoints known after %.0f ms\n",
+            f.participants, f.participants == 1 ? "" : "s", c.dds.domain,
+            double(f.waited_ns) / 1e6);
+      }
     } else {
       o->dds_off_reason_ = p.error().message();
       std::fprintf(stderr, "aprt run: DDS output disabled: %s\n", p.error().message());

@@ -239,6 +239,7 @@ Health Runtime::health(int64_t now_ns) const {
   h.last_flags = shared_.last_flags.load(std::memory_order_acquire);
   h.output_errors = shared_.output_errors.load(std::memory_order_acquire);
   h.end_of_stream = capture_done && inference_done && ring_->size() == 0;
+  h.frame_limit = channels_[0]->frame_limit != 0;
   if (capture_done && h.last_frame_ns)
     h.last_frame_ns = h.now_ns;  // a finished replay is not stale
   return h;

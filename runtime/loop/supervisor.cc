@@ -59,7 +59,8 @@ RunState Supervisor::step(const Health& health) noexcept {
   alive_ = alive(h);
   if (state_ == RunState::kFault || state_ == RunState::kStopping) return state_;
   if (h.end_of_stream) {
-    set(RunState::kStopping, "end of the replayed sequence");
+    set(RunState::kStopping, h.frame_limit ? "the source delivered its configured frames"
+                                           : "end of the replayed sequence");
     return state_;
   }
   if (!alive_) {

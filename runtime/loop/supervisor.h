@@ -22,6 +22,7 @@ struct Health {
   uint64_t output_errors = 0;  // cumulative failed writes of the outputs (DDS, injected)
   bool source_failed = false;
   bool end_of_stream = false;
+  bool frame_limit = false;  // ... because a device source delivered its configured `frames`
 };
 
 class Supervisor {

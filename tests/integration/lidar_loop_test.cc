@@ -240,13 +240,9 @@ struct LidarDriver {
   }
 };
 
-// The small points model of tests/support with a pose head that answers
-// unit quaternions, so its estimates pass the sanity checks and reach DDS.
+// The small points model of tests/support whose estimates reach DDS.
 std::string sane_points_model(const std::string& dir) {
-  const auto bytes = test::make_small_points_model([](test::ModelBuilder& m) {
-    m.set_data(m.tensor_index("head_r.w"), std::vector<float>(64, 0.001f));
-    m.set_data(m.tensor_index("head_r.b"), {1.0f, 0.0f, 0.0f, 0.0f});
-  });
+  const auto bytes = test::make_sane_small_points_model();
   const std::string path = dir + "/sane_points.aprt";
   std::ofstream(path, std::ios::binary)
       .write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));

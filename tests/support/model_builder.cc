@@ -370,6 +370,13 @@ std::vector<uint8_t> make_small_points_model(void (*edit)(ModelBuilder&)) {
   return b.build();
 }
 
+std::vector<uint8_t> make_sane_small_points_model() {
+  return make_small_points_model([](ModelBuilder& m) {
+    m.set_data(m.tensor_index("head_r.w"), std::vector<float>(64, 0.001f));
+    m.set_data(m.tensor_index("head_r.b"), {1.0f, 0.0f, 0.0f, 0.0f});
+  });
+}
+
 std::vector<uint8_t> make_small_model() {
   return make_small_model(nullptr);
 }

@@ -91,6 +91,9 @@ std::vector<uint8_t> make_small_int8_model(void (*edit)(ModelBuilder&) = nullptr
 // -> max -> 3-NN interpolation back to 16 ++ skip -> 2 x 2 x 2 grid tokens ->
 // projection -> attention pooling -> pose [1, 7].
 std::vector<uint8_t> make_small_points_model(void (*edit)(ModelBuilder&) = nullptr);
+// The same with a pose head that answers unit quaternions, so its estimates
+// pass the sanity checks and reach DDS (the loop and peer tests).
+std::vector<uint8_t> make_sane_small_points_model();
 
 struct SectionInfo {
   uint32_t tag;

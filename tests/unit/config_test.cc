@@ -118,6 +118,26 @@ TEST(Config, ReplayFrameLimit) {
   expect_refused("model: m\nsource: {replay: {path: d, frames: -1}}\n", "source.replay.frames");
 }
 
+TEST(Config, DeviceFrameLimitsAndDiscoveryWait) {
+  auto c = parse_config(
+      "model: m\nsource: {type: v4l2, v4l2: {frames: 25}, libcamera: {frames: 30}, "
+      "pointcloud2: {frames: 12}}\n"
+      "output: {dds: {discovery_wait_ms: 0}}\n",
+      "t");
+  ASSERT_TRUE(c) << c.error().message();
+  EXPECT_EQ(c->source.v4l2.frames, 25);
+  EXPECT_EQ(c->source.libcamera.frames, 30);
+  EXPECT_EQ(c->source.pointcloud2.frames, 12);
+  EXPECT_EQ(c->output.dds.discovery_wait_ms, 0);
+  auto d = parse_config("model: m\nsource: {type: v4l2}\n", "t");
+  ASSERT_TRUE(d) << d.error().message();
+  EXPECT_EQ(d->output.dds.discovery_wait_ms, 1500);
+  expect_refused("model: m\nsource: {libcamera: {frames: -1}}\n", "source.libcamera.frames");
+  expect_refused("model: m\nsource: {v4l2: {frames: x}}\n", "source.v4l2.frames");
+  expect_refused("model: m\noutput: {dds: {discovery_wait_ms: 20000}}\n",
+                 "output.dds.discovery_wait_ms");
+}
+
 TEST(Config, FaultInjectionAndSigning) {
   auto c = parse_config(
       "model: m\nsource: {replay: {path: d}}\nfault_injection:\n"

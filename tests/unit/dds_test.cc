@@ -12,6 +12,7 @@
 #include <cstring>
 #include <vector>
 
+#include "drivers/dds/dds_domain.h"
 #include "drivers/input/pointcloud2/pointcloud2_reader.h"
 #include "drivers/output/dds/dds_publisher.h"
 #include "ros2_interfaces.h"
@@ -196,6 +197,62 @@ TEST(Dds, BadTopicIsAClearError) {
   auto pub = DdsPublisher::create(o);
   ASSERT_FALSE(pub);
   EXPECT_NE(std::string(pub.error().message()).find("dds:"), std::string::npos);
+}
+
+// The start-up wait (dds_discovery.h): bounded, over as soon as every other
+// participant has told an endpoint, and honest about one that never does.
+TEST(Dds, StartUpWaitsForTheEndpointsOfParticipantsAlreadyThere) {
+  const uint32_t domain = test_domain();
+  const std::string xml = dds_loopback_config(domain);
+  // Loopback only, like the publisher's; made already when an earlier test of this process did.
+  const dds_entity_t d = dds_create_domain(domain, xml.c_str());
+  ASSERT_TRUE(d > 0 || d == DDS_RETCODE_PRECONDITION_NOT_MET) << d;
+  DdsOptions o = options("/aprt_test/discovery_pose");
+  o.domain = domain;
+  o.discovery_wait_ms = 3000;
+  {  // nobody else: the quiet period (100 ms) only
+    auto pub = DdsPublisher::create(o);
+    ASSERT_TRUE(pub) << pub.error().message();
+    const DdsDiscoveryReport& r = pub.value()->discovery();
+    EXPECT_EQ(r.participants, 0);
+    EXPECT_EQ(r.pending, 0);
+    EXPECT_GE(r.waited_ns, 100000000);
+    EXPECT_LT(r.waited_ns, 2000000000);
+  }
+  // A participant with a reader: known, its endpoint known, no full wait.
+  const dds_entity_t peer = dds_create_participant(domain, nullptr, nullptr);
+  const dds_entity_t t =
+      dds_create_topic(peer, &geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc,
+                       "rt/aprt_test/discovery_pose", nullptr, nullptr);
+  ASSERT_GT(dds_create_reader(peer, t, nullptr, nullptr), 0);
+  {
+    auto pub = DdsPublisher::create(o);
+    ASSERT_TRUE(pub) << pub.error().message();
+    const DdsDiscoveryReport& r = pub.value()->discovery();
+    EXPECT_EQ(r.participants, 1);
+    EXPECT_EQ(r.pending, 0);
+    EXPECT_LT(r.waited_ns, 2000000000);
+  }
+  // A participant that never tells an endpoint: the wait ends at its bound, saying so.
+  const dds_entity_t bare = dds_create_participant(domain, nullptr, nullptr);
+  o.discovery_wait_ms = 300;
+  {
+    auto pub = DdsPublisher::create(o);
+    ASSERT_TRUE(pub) << pub.error().message();
+    const DdsDiscoveryReport& r = pub.value()->discovery();
+    EXPECT_EQ(r.participants, 2);
+    EXPECT_EQ(r.pending, 1);
+    EXPECT_GE(r.waited_ns, 300000000);
+  }
+  o.discovery_wait_ms = 0;  // off: no wait at all
+  {
+    auto pub = DdsPublisher::create(o);
+    ASSERT_TRUE(pub) << pub.error().message();
+    EXPECT_EQ(pub.value()->discovery().waited_ns, 0);
+  }
+  dds_delete(bare);
+  dds_delete(peer);
+  if (d > 0) dds_delete(d);
 }
 
 // A ROS 2 LiDAR driver's side: PointCloud2 with x y z intensity float32 and

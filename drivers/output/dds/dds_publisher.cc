@@ -86,6 +86,7 @@ Expected<std::unique_ptr<DdsPublisher>> DdsPublisher::create(const DdsOptions& o
   s.diag.status._length = 1;
   s.diag.status._maximum = 1;
   s.diag.status._release = false;
+  p->discovery_ = settle_discovery(p->participant_, int64_t(o.discovery_wait_ms) * 1000000);
   return p;
 }
 

@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 
+#include "drivers/output/dds/dds_discovery.h"
 #include "runtime/base/expected.h"
 
 namespace aprt {
@@ -21,6 +22,9 @@ struct DdsOptions {
   bool reliable = true;  // ROS default QoS: reliable, keep last 10, volatile
   int depth = 10;
   bool loopback_only = false;  // discovery on 127.0.0.1 only (tests, HIL)
+  // At create(), wait up to this long until the participants already in the
+  // domain have told their endpoints (dds_discovery.h); 0: no wait.
+  int discovery_wait_ms = 1500;
 };
 
 struct DdsPose {
@@ -44,11 +48,14 @@ class DdsPublisher {
 
   static const char* pose_type_name();
   int32_t participant() const { return participant_; }
+  // What the start-up discovery wait found (DdsOptions::discovery_wait_ms).
+  const DdsDiscoveryReport& discovery() const { return discovery_; }
 
  private:
   DdsPublisher() = default;
   int32_t participant_ = 0, pose_writer_ = 0, diag_writer_ = 0, domain_ = 0;
   char frame_id_[64] = {};
+  DdsDiscoveryReport discovery_;
   struct Samples;
   std::unique_ptr<Samples> samples_;
 };
