@@ -14,6 +14,8 @@ PACKAGES=(
   libyaml-dev libpng-dev libjpeg-dev libeigen3-dev cyclonedds-dev cyclonedds-tools libsodium-dev libcamera-dev libcamera-ipa
   # the Fast DDS peer of the tests (ROS 2's default middleware; tests/peers)
   libfastrtps-dev fastddsgen default-jre-headless util-linux
+  # independent MCAP readers of the tests (npm @mcap/core, Foxglove's; tests/tools/mcap)
+  nodejs npm
   # CAN tools (cansend/candump, for the HIL rig and by hand)
   can-utils
   # worst-case timing runs under CPU load (docs/timing.md)
@@ -50,6 +52,13 @@ fi
   echo "setup: /usr/bin/python3 cannot import torch/onnx/numpy" >&2
   exit 1
 }
+
+# The tests' independent MCAP readers, at the versions package-lock.json pins
+# (--ignore-scripts: nothing of theirs runs at install).
+if [ ! -d tests/tools/mcap/node_modules/@mcap/core ]; then
+  echo "setup: npm packages for tests/tools/mcap"
+  (cd tests/tools/mcap && npm ci --ignore-scripts --no-audit --no-fund --loglevel=error)
+fi
 
 jobs=$(nproc)
 for preset in release asan; do
