@@ -12,7 +12,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 targets=(model_file_fuzz pointcloud2_fuzz pcd_fuzz kitti_fuzz image_fuzz pose_list_fuzz
-         frame_sidecar_fuzz candump_log_fuzz config_fuzz dbc_fuzz)
+         frame_sidecar_fuzz candump_log_fuzz config_fuzz dbc_fuzz mcap_fuzz)
 if [[ "${1:-}" == "--list" ]]; then printf '%s\n' "${targets[@]}"; exit 0; fi
 seconds="${1:?usage: tools/fuzz.sh SECONDS [TARGET...]}"
 shift

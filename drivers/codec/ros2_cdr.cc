@@ -117,6 +117,123 @@ size_t diagnostics(uint8_t* buf, size_t cap, int64_t stamp_ns, const char* frame
   return w.size();
 }
 
+size_t pose_timing(uint8_t* buf, size_t cap, const char* frame_id, const PoseTiming& t) noexcept {
+  CdrWriter w(buf, cap);
+  w.header(t.stamp_ns, frame_id);
+  w.u64(t.index);
+  w.u64(t.frame_sequence);
+  w.u32(t.flags);
+  w.u8(t.state);
+  w.u8(t.published ? 1 : 0);
+  for (int k = 0; k < 3; ++k) w.f64(t.position[k]);
+  for (int k = 0; k < 4; ++k) w.f64(t.orientation[k]);
+  w.i64(t.capture_ns);
+  w.i64(t.inference_start_ns);
+  w.i64(t.inference_end_ns);
+  w.i64(t.publish_ns);
+  return w.size();
+}
+
+namespace {
+
+class CdrReader {
+ public:
+  CdrReader(const uint8_t* p, size_t n) : p_(p), n_(n) {
+    ok_ = n >= 4 && p[0] == 0x00 && p[1] == 0x01;  // CDR, little endian
+    pos_ = 4;
+  }
+  bool ok() const { return ok_; }
+  template <typename T>
+  T get() {
+    T v{};
+    align(sizeof(T));
+    if (!ok_ || pos_ + sizeof v > n_) {
+      ok_ = false;
+      return v;
+    }
+    std::memcpy(&v, p_ + pos_, sizeof v);
+    pos_ += sizeof v;
+    return v;
+  }
+  // A string: its bytes end in a NUL inside the message, or the read fails.
+  const char* str() {
+    const uint32_t len = get<uint32_t>();
+    if (!ok_ || len == 0 || pos_ + len > n_ || p_[pos_ + len - 1] != 0) {
+      ok_ = false;
+      return "";
+    }
+    const char* s = reinterpret_cast<const char*>(p_ + pos_);
+    pos_ += len;
+    return s;
+  }
+  const uint8_t* bytes(size_t* size) {
+    const uint32_t len = get<uint32_t>();
+    if (!ok_ || pos_ + len > n_) {
+      ok_ = false;
+      *size = 0;
+      return nullptr;
+    }
+    const uint8_t* b = p_ + pos_;
+    pos_ += len;
+    *size = len;
+    return b;
+  }
+  int64_t stamp() {
+    const int32_t sec = get<int32_t>();
+    const uint32_t nsec = get<uint32_t>();
+    if (nsec >= 1000000000u) ok_ = false;
+    return int64_t(sec) * 1000000000 + nsec;
+  }
+
+ private:
+  void align(size_t a) {
+    const size_t body = pos_ - 4;
+    pos_ += (a - body % a) % a;
+  }
+  const uint8_t* p_;
+  size_t n_, pos_ = 0;
+  bool ok_ = false;
+};
+
+}  // namespace
+
+bool read_image(const uint8_t* cdr, size_t n, ImageMsg* out) noexcept {
+  CdrReader r(cdr, n);
+  out->stamp_ns = r.stamp();
+  out->frame_id = r.str();
+  out->height = r.get<uint32_t>();
+  out->width = r.get<uint32_t>();
+  out->encoding = r.str();
+  out->is_bigendian = r.get<uint8_t>() != 0;
+  out->step = r.get<uint32_t>();
+  out->data = r.bytes(&out->size);
+  return r.ok();
+}
+
+bool read_pointcloud2(const uint8_t* cdr, size_t n, PointCloud2Msg* out) noexcept {
+  CdrReader r(cdr, n);
+  out->stamp_ns = r.stamp();
+  out->frame_id = r.str();
+  out->height = r.get<uint32_t>();
+  out->width = r.get<uint32_t>();
+  const uint32_t fields = r.get<uint32_t>();
+  if (fields > uint32_t(PointCloud2Msg::kMaxFields)) return false;
+  out->n_fields = int(fields);
+  for (uint32_t i = 0; i < fields; ++i) {
+    PointFieldMsg& f = out->fields[i];
+    f.name = r.str();
+    f.offset = r.get<uint32_t>();
+    f.datatype = r.get<uint8_t>();
+    f.count = r.get<uint32_t>();
+  }
+  out->is_bigendian = r.get<uint8_t>() != 0;
+  out->point_step = r.get<uint32_t>();
+  out->row_step = r.get<uint32_t>();
+  out->data = r.bytes(&out->size);
+  out->is_dense = r.get<uint8_t>() != 0;
+  return r.ok();
+}
+
 #define APRT_SEP \
   "================================================================================\n"
 #define APRT_HEADER_DEPS            \
@@ -196,6 +313,21 @@ const char kDiagnosticArrayDefinition[] =
     "MSG: diagnostic_msgs/KeyValue\n"
     "string key\n"
     "string value\n";
+
+const char kPoseTimingDefinition[] =
+    "# aprt's record of one pose (docs/outputs.md, \"Recording\")\n"
+    "std_msgs/Header header\n"
+    "uint64 index\n"
+    "uint64 frame_sequence\n"
+    "uint32 flags\n"
+    "uint8 state\n"
+    "bool published\n"
+    "float64[3] position\n"
+    "float64[4] orientation\n"
+    "int64 capture_ns\n"
+    "int64 inference_start_ns\n"
+    "int64 inference_end_ns\n"
+    "int64 publish_ns\n" APRT_HEADER_DEPS;
 
 #undef APRT_HEADER_DEPS
 #undef APRT_SEP

@@ -106,7 +106,8 @@ int cmd_run(int argc, char** argv) {
         "                  the demo drive, %s/config/default.yaml\n"
         "  --model FILE    override the configuration's model\n"
         "  --replay DIR    replay this DeepLoc-layout sequence (a LiDAR sequence with\n"
-        "                  a LiDAR source: lidar_poses.txt + scans)\n"
+        "                  a LiDAR source: lidar_poses.txt + scans), or a recorded\n"
+        "                  drive FILE.mcap (--record's, or a ros2 bag in MCAP)\n"
         "  --rate HZ       replay rate (0: as fast as inference runs)\n"
         "  --frames N      stop the replay after N frames\n"
         "  --threads N     engine threads\n"
@@ -115,6 +116,12 @@ int cmd_run(int argc, char** argv) {
         "                  p99/p99.9/max, misses, drops, allocations after the first\n"
         "                  pose, RSS) and FILE with .csv (per-pose timestamps); plot\n"
         "                  with python3 -m aprt_tools plot-timing FILE\n"
+        "  --record FILE   record the drive as a ROS 2 bag (MCAP): the frames or\n"
+        "                  scans as they entered, every pose, the diagnostics and\n"
+        "                  the timing records; replay it with source.type mcap\n"
+        "  --record-ring N frames that may wait for the recorder (default 16);\n"
+        "                  a full ring drops a frame from the recording, never\n"
+        "                  from the drive (counted in the summary)\n"
         "  --save-frame N:FILE  write the raw frame of the N-th pose to FILE and its\n"
         "                  geometry and pose to FILE.txt (check with aprt infer)\n"
         "  --check         validate the configuration and load the model, then exit\n"
@@ -132,6 +139,8 @@ int cmd_run(int argc, char** argv) {
   const bool check = args.flag("--check");
   const char* timing = args.value("--timing");
   const char* save = args.value("--save-frame");
+  const char* record = args.value("--record");
+  const long record_ring = args.integer("--record-ring", 16, 2, 256);
   if (args.refuse("run")) return 2;
   const std::string path = config_path ? config_path : data_dir() + "/config/default.yaml";
   auto loaded = load_config(path);
@@ -164,8 +173,12 @@ int cmd_run(int argc, char** argv) {
   }
   // The command line's replay options apply to every camera's replay.
   const auto adjust = [&](Config::Source& src) {
-    if (replay) {  // a LiDAR configuration replays LiDAR sequences
-      src.type = src.lidar_source() ? SourceType::kLidarReplay : SourceType::kReplay;
+    if (replay) {  // a LiDAR configuration replays LiDAR sequences; an .mcap file, itself
+      const std::string r(replay);
+      const bool mcap = r.size() > 5 && r.compare(r.size() - 5, 5, ".mcap") == 0;
+      src.type = mcap                 ? SourceType::kMcap
+                 : src.lidar_source() ? SourceType::kLidarReplay
+                                      : SourceType::kReplay;
       src.replay.path = replay;
     } else {
       src.replay.path = resolve(src.replay.path, base);
@@ -211,9 +224,24 @@ int cmd_run(int argc, char** argv) {
     }
     (*runtime)->save_frame(n, colon + 1);
   }
+  if (record) {
+    if (Status s = (*runtime)->start_recording(record, int(record_ring)); !s) {
+      std::fprintf(stderr, "aprt run: %s\n", s.error().message());
+      return 2;
+    }
+  }
   (*runtime)->set_allocation_counter(allocation_count, allocation_counter_covers_malloc());
-  const int code = (*runtime)->run();
+  int code = (*runtime)->run();
   g_runtime = nullptr;
+  if (record) {
+    char line[512];
+    const Status s = (*runtime)->finish_recording(line, sizeof line);
+    std::printf("%s\n", line);
+    if (!s) {
+      std::fprintf(stderr, "aprt run: record: %s\n", s.error().message());
+      if (code == 0) code = 1;
+    }
+  }
   if (timing) {
     if (Status s = (*runtime)->write_timing_report(timing); !s) {
       std::fprintf(stderr, "aprt run: %s\n", s.error().message());

@@ -21,7 +21,7 @@ constexpr struct {
 } kSourceTypes[] = {
     {"replay", SourceType::kReplay},           {"v4l2", SourceType::kV4l2},
     {"libcamera", SourceType::kLibcamera},     {"lidar_replay", SourceType::kLidarReplay},
-    {"pointcloud2", SourceType::kPointCloud2},
+    {"pointcloud2", SourceType::kPointCloud2}, {"mcap", SourceType::kMcap},
 };
 }  // namespace
 
@@ -67,10 +67,10 @@ Status read_source(Reader& r, const Node* src, const std::string& path, Config::
   const auto join = [&](const std::string& p, const char* k) { return Reader::join(p, k); };
 #define TRY(expr) \
   if (!(s = (expr))) return s
-  TRY(r.map(src, path, {"type", "replay", "v4l2", "libcamera", "pointcloud2", "lidar"}));
+  TRY(r.map(src, path, {"type", "replay", "v4l2", "libcamera", "pointcloud2", "lidar", "mcap"}));
   std::string type = source_type_name(src_out->type);
   TRY(r.str(src, path, "type", &type,
-            {"replay", "v4l2", "libcamera", "lidar_replay", "pointcloud2"}));
+            {"replay", "v4l2", "libcamera", "lidar_replay", "pointcloud2", "mcap"}));
   source_type_from_name(type, &src_out->type);  // one of the choices just checked
   const Node* rp = src ? src->get("replay") : nullptr;
   TRY(r.map(rp, join(path, "replay"), {"path", "rate_hz", "loop", "frames"}));
@@ -82,6 +82,9 @@ Status read_source(Reader& r, const Node* src, const std::string& path, Config::
   }
   TRY(r.boolean(rp, join(path, "replay"), "loop", &src_out->replay.loop));
   TRY(r.integer(rp, join(path, "replay"), "frames", 0, 1000000000, &src_out->replay.frames));
+  const Node* mc = src ? src->get("mcap") : nullptr;
+  TRY(r.map(mc, join(path, "mcap"), {"topic"}));
+  TRY(r.str(mc, join(path, "mcap"), "topic", &src_out->mcap.topic));
   const Node* v = src ? src->get("v4l2") : nullptr;
   TRY(r.map(v, join(path, "v4l2"),
             {"device", "width", "height", "format", "fps", "buffers", "frames"}));
@@ -172,7 +175,7 @@ Status read_cameras(Reader& r, const Node* root, Config* c) {
     const Node* src = n->get("source");
     if (!src) return r.fail(n, p + ".source", "required");
     if (!(s = read_source(r, src, p + ".source", &cam.source))) return s;
-    if (cam.source.type == SourceType::kReplay && cam.source.replay.path.empty()) {
+    if (cam.source.replay_source() && cam.source.replay.path.empty()) {
       return r.fail(src, p + ".source.replay.path", "required for a replay source");
     }
     const Node* t = n->get("sensor_to_base_link");

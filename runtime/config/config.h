@@ -15,7 +15,7 @@ namespace aprt {
 
 // Where frames come from: camera frames (replay, v4l2, libcamera) or LiDAR
 // scans (lidar_replay, pointcloud2). Parsed once from source.type.
-enum class SourceType : uint8_t { kReplay, kV4l2, kLibcamera, kLidarReplay, kPointCloud2 };
+enum class SourceType : uint8_t { kReplay, kV4l2, kLibcamera, kLidarReplay, kPointCloud2, kMcap };
 const char* source_type_name(SourceType t);
 // false for a name that is none of the above.
 bool source_type_from_name(const std::string& name, SourceType* out);
@@ -53,6 +53,10 @@ struct Config {
       bool loop = false;
       int frames = 0;  // stop after this many frames (0: the whole sequence, or forever with loop)
     } replay;          // also lidar_replay's: path is the LiDAR sequence (lidar_poses.txt + scans)
+                       // and mcap's: path is the .mcap file
+    struct Mcap {
+      std::string topic;  // the image or point-cloud channel; empty: the file's first
+    } mcap;
     struct V4l2 {
       std::string device = "/dev/video0";
       int width = 640, height = 480;
@@ -91,7 +95,8 @@ struct Config {
     }
     // A recorded sequence (camera or LiDAR), paced by aprt; not a device.
     bool replay_source() const {
-      return type == SourceType::kReplay || type == SourceType::kLidarReplay;
+      return type == SourceType::kReplay || type == SourceType::kLidarReplay ||
+             type == SourceType::kMcap;
     }
   } source;
 

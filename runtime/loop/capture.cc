@@ -8,6 +8,7 @@
 
 #include "runtime/loop/model_loader.h"
 #include "runtime/loop/open_source.h"
+#include "runtime/loop/recorder.h"
 #include "runtime/pose/pose_geometry.h"
 
 namespace aprt {
@@ -32,6 +33,9 @@ Expected<std::unique_ptr<CaptureChannel>> open_channel(const Config::Camera& cam
     return Error(opened.error().code(), "run: camera %s: %s", cam.name.c_str(),
                  opened.error().message());
   }
+  if (Status fit = model_fits_source(engine.meta(), src, model, opened->scans ? 1 : 0); !fit) {
+    return fit.error();
+  }
   *frames = opened->frames;
   ch->frame_limit = src.type == SourceType::kV4l2          ? uint64_t(src.v4l2.frames)
                     : src.type == SourceType::kLibcamera   ? uint64_t(src.libcamera.frames)
@@ -44,7 +48,7 @@ Expected<std::unique_ptr<CaptureChannel>> open_channel(const Config::Camera& cam
   if (ch->replay() && src.replay.rate_hz == 0 && !src.replay.recorded) {
     ch->source->pace_with(ch->slot.get());
   }
-  auto input = src.lidar_source()
+  auto input = opened->scans
                    ? EngineInput::for_scans(engine, size_t(src.lidar.max_points))
                    : EngineInput::for_images(engine, opened->format, opened->width, opened->height);
   if (!input) {
@@ -81,6 +85,14 @@ void* capture_thread(void* channel) {
           c.slot->back().info.capture_ns = monotonic_ns();  // arrival, for frame age
         }
         c.slot->back().info.source = uint32_t(c.index);
+        if (c.recorder) {  // a copy into the recorder's ring, never a wait
+          // The frame's wall-clock stamp, fixed now: the recorded frame and
+          // the pose published for it carry the same stamp.
+          FrameInfo& fi = c.slot->back().info;
+          if (!fi.source_stamp_ns)
+            fi.source_stamp_ns = fi.capture_ns + realtime_ns() - monotonic_ns();
+          c.recorder->offer_frame(c.slot->back(), fi.source_stamp_ns);
+        }
         c.slot->publish();
         const uint64_t n = c.captured.fetch_add(1);
         if (const int64_t stall = primary ? faults.stall_ns(n) : 0) {

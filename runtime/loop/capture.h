@@ -22,6 +22,8 @@
 
 namespace aprt {
 
+class Recorder;
+
 struct CaptureChannel {
   size_t index = 0;  // configuration order; 0 is the trigger of a fusion cycle
   std::string name, thread_name;
@@ -34,7 +36,9 @@ struct CaptureChannel {
   std::atomic<bool> done{false}, failed{false};
   std::atomic<int64_t> beat{0};
   std::atomic<uint64_t> captured{0};
-  uint64_t frame_limit = 0;  // a device's `frames`: done after this many (0: no limit)
+  uint64_t frame_limit = 0;
+  Recorder* recorder = nullptr;  // the trigger camera's, when the run records (recorder.h)  // a
+                                 // device's `frames`: done after this many (0: no limit)
   // inference thread only
   uint64_t missing = 0, flagged = 0, outliers = 0;
   pthread_t thread{};
@@ -46,7 +50,8 @@ struct CaptureChannel {
 
   bool scans() const { return input->scans(); }
   bool replay() const {
-    return source_type == SourceType::kReplay || source_type == SourceType::kLidarReplay;
+    return source_type == SourceType::kReplay || source_type == SourceType::kLidarReplay ||
+           source_type == SourceType::kMcap;
   }
 };
 

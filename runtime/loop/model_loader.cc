@@ -21,9 +21,17 @@ ModelRequest model_request(const Config& config) {
   return r;
 }
 
-Status model_fits_source(const ModelMeta& m, const Config::Source& src, const std::string& model) {
+Status model_fits_source(const ModelMeta& m, const Config::Source& src, const std::string& model,
+                         int scans) {
   const bool lidar_model = m.modality != format::Modality::kImage;
-  if (src.lidar_source() == lidar_model) return ok();
+  const bool lidar_source = scans < 0 ? src.lidar_source() : scans == 1;
+  if (src.type == SourceType::kMcap && scans < 0) return ok();  // checked once the file is open
+  if (lidar_source == lidar_model) return ok();
+  if (src.type == SourceType::kMcap) {
+    return Error(Errc::kWrongTarget, "run: %s is a %s model, but %s records %s", model.c_str(),
+                 format::modality_name(m.modality), src.replay.path.c_str(),
+                 lidar_source ? "LiDAR scans" : "camera frames");
+  }
   return Error(Errc::kWrongTarget, "run: %s is a %s model, but source.type '%s' gives %s (%s)",
                model.c_str(), format::modality_name(m.modality), source_type_name(src.type),
                src.lidar_source() ? "LiDAR scans" : "camera frames",

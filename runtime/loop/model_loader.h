@@ -35,7 +35,10 @@ Expected<std::unique_ptr<Engine>> load_model(const ModelRequest& request, std::s
 // ok() when `next` can replace `running` between two frames.
 // A camera model needs a camera source, a LiDAR model a LiDAR one (the message
 // names the source types that would fit).
-Status model_fits_source(const ModelMeta& m, const Config::Source& src, const std::string& model);
+// scans: what an opened source delivers (1 scans, 0 frames), -1: from its type
+// (an mcap source passes until its file is open).
+Status model_fits_source(const ModelMeta& m, const Config::Source& src, const std::string& model,
+                         int scans = -1);
 
 Status reload_compatible(const ModelMeta& running, const ModelMeta& next);
 

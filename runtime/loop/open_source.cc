@@ -4,6 +4,7 @@
 #include "drivers/input/camera/v4l2_source.h"
 #include "drivers/input/lidar/lidar_replay_source.h"
 #include "drivers/input/pointcloud2/pointcloud2_source.h"
+#include "drivers/input/replay/mcap_source.h"
 #include "drivers/input/replay/replay_source.h"
 
 namespace aprt {
@@ -69,11 +70,24 @@ Expected<OpenedSource> open_source(const Config::Source& src) {
       o.source = std::move(dev.value());
       return o;
     }
+    case SourceType::kMcap: {
+      auto m = McapSource::open(src.replay.path.c_str(), src.mcap.topic, pacing_of(src),
+                                scan_options(src));
+      if (!m) return m.error();
+      o.scans = m.value()->scans();
+      o.width = m.value()->width();
+      o.height = m.value()->height();
+      o.format = m.value()->format();
+      o.frames = m.value()->size();
+      o.source = std::move(m.value());
+      return o;
+    }
     case SourceType::kLidarReplay: {
       auto replay =
           LidarReplaySource::open(src.replay.path.c_str(), pacing_of(src), scan_options(src));
       if (!replay) return replay.error();
       o.frames = replay.value()->size();
+      o.scans = true;
       o.source = std::move(replay.value());
       return o;
     }
@@ -86,6 +100,7 @@ Expected<OpenedSource> open_source(const Config::Source& src) {
       po.loopback_only = src.pointcloud2.loopback_only;
       auto dev = PointCloud2Source::create(po, scan_options(src));
       if (!dev) return dev.error();
+      o.scans = true;
       o.source = std::move(dev.value());
       return o;
     }

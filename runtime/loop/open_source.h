@@ -15,7 +15,8 @@ struct OpenedSource {
   std::unique_ptr<FrameSource> source;
   int width = 0, height = 0;  // what the source is configured to deliver
   PixelFormat format = PixelFormat::kRgb24;
-  size_t frames = 0;  // a replay's length (0 for a device)
+  size_t frames = 0;   // a replay's length (0 for a device)
+  bool scans = false;  // LiDAR scans (an mcap file's channel decides)
 };
 
 Expected<OpenedSource> open_source(const Config::Source& src);

@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "drivers/output/dds/dds_publisher.h"
+#include "runtime/loop/recorder.h"
 #include "runtime/pose/pose_flags.h"
 
 namespace aprt {
@@ -119,12 +120,34 @@ const can::SenderStats* PoseOutputs::can_stats() const {
 
 void PoseOutputs::publish(const PoseRecord& r, int64_t now_ns,
                           int64_t realtime_offset_ns) noexcept {
-  if (!dds_ && !can_sender_) return;
+  if (!dds_ && !can_sender_ && !recorder_) return;
   last_ = geometry_->from_base(r.base_position, r.base_orientation);
   geometry_->covariance(r.pose, last_.covariance);
   const int64_t stamp_ns =
       r.source_stamp_ns ? r.source_stamp_ns : r.capture_ns + realtime_offset_ns;
   const bool valid = r.flags == 0 && r.state == RunState::kRunning;
+  if (recorder_) {
+    RecordedPose p;
+    p.stamp_ns = stamp_ns;
+    p.index = r.index;
+    p.frame_sequence = r.frame_sequence;
+    p.flags = r.flags;
+    p.state = uint8_t(r.state);
+    p.published = valid;
+    for (int k = 0; k < 3; ++k) p.position[k] = last_.position[k];
+    p.orientation[0] = last_.orientation.w();
+    p.orientation[1] = last_.orientation.x();
+    p.orientation[2] = last_.orientation.y();
+    p.orientation[3] = last_.orientation.z();
+    std::memcpy(p.covariance, last_.covariance, sizeof p.covariance);
+    std::memcpy(p.estimate_position, r.pose.position, sizeof p.estimate_position);
+    std::memcpy(p.estimate_orientation, r.pose.orientation, sizeof p.estimate_orientation);
+    p.capture_ns = r.capture_ns;
+    p.inference_start_ns = r.inference_start_ns;
+    p.inference_end_ns = r.inference_end_ns;
+    p.publish_ns = now_ns;
+    recorder_->offer_pose(p);
+  }
   if (dds_) {
     if (valid) {
       DdsPose p;
@@ -180,7 +203,7 @@ void PoseOutputs::publish(const PoseRecord& r, int64_t now_ns,
 }
 
 void PoseOutputs::publish_status(const StatusSnapshot& s, int64_t realtime_ns) noexcept {
-  if (!dds_) return;
+  if (!dds_ && !recorder_) return;
   enum {
     kState,
     kReason,
@@ -255,6 +278,10 @@ void PoseOutputs::publish_status(const StatusSnapshot& s, int64_t realtime_ns) n
   for (int i = 0; i < count; ++i) values[i] = v[i];
   char message[128];
   std::snprintf(message, sizeof message, "%s: %s", run_state_name(s.state), s.reason);
+  if (recorder_) {
+    recorder_->offer_status(realtime_ns, diagnostic_level(s.state), message, keys, values, count);
+  }
+  if (!dds_) return;
   if (dds_->publish_status(realtime_ns, diagnostic_level(s.state), message, keys, values, count)) {
     ++stats_.dds_status;
   } else {

@@ -24,6 +24,8 @@
 
 namespace aprt {
 
+class Recorder;
+
 class DdsPublisher;
 
 struct OutputStats {
@@ -67,6 +69,9 @@ class PoseOutputs {
   const OutputStats& stats() const { return stats_; }
   const can::SenderStats* can_stats() const;
   bool dds_active() const { return dds_ != nullptr; }
+  // Every pose and diagnostics message also goes to `r` (recorder.h), from
+  // the publisher thread. Set before the run starts.
+  void set_recorder(Recorder* r) { recorder_ = r; }
   bool can_active() const { return can_sender_ != nullptr; }
   // The last base_link pose computed (for tests and the console).
   const BasePose& last_base_pose() const { return last_; }
@@ -78,6 +83,7 @@ class PoseOutputs {
   std::unique_ptr<PoseGeometry> geometry_;
   double sigma_pos_ = 0, sigma_rot_deg_ = 0;
   std::unique_ptr<DdsPublisher> dds_;
+  Recorder* recorder_ = nullptr;
   std::unique_ptr<can::SocketCan> can_socket_;
   std::unique_ptr<can::PoseCanSender> can_sender_;
   BasePose last_{};

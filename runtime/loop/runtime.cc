@@ -395,13 +395,43 @@ void Runtime::write_saved_frame(const FrameBuffer& f, const PoseRecord& rec, con
                f.info.name, save_path_.c_str());
 }
 
+Status Runtime::start_recording(const std::string& path, int ring_frames) {
+  if (recorder_) return Error(Errc::kInvalidArgument, "record: already recording");
+  CaptureChannel& trigger = *channels_[0];
+  RecorderOptions o;
+  o.path = path;
+  o.max_frame_bytes = trigger.source->max_frame_bytes();
+  o.scans = trigger.scans();
+  o.ring_frames = ring_frames;
+  o.frame_id = config_.output.frame_id;
+  if (config_.output.dds.enabled) {
+    o.pose_topic = config_.output.dds.pose_topic;
+    o.diagnostics_topic = config_.output.dds.diagnostics_topic;
+  }
+  auto r = Recorder::create(o);
+  if (!r) return r.error();
+  recorder_ = std::move(r.value());
+  trigger.recorder = recorder_.get();
+  outputs_->set_recorder(recorder_.get());
+  return ok();
+}
+
+Status Runtime::finish_recording(char* line, size_t size) {
+  line[0] = '\0';
+  if (!recorder_) return ok();
+  Status s = recorder_->stop();
+  recorder_summary(*recorder_, line, size);
+  return s;
+}
+
 Status Runtime::write_timing_report(const char* json_path) const {
   TimingContext ctx;
   ctx.model = config_.model.c_str();
   const Config::Source& src = config_.source;
   switch (src.type) {
     case SourceType::kReplay:
-    case SourceType::kLidarReplay: ctx.source = src.replay.path.c_str(); break;
+    case SourceType::kLidarReplay:
+    case SourceType::kMcap: ctx.source = src.replay.path.c_str(); break;
     case SourceType::kPointCloud2: ctx.source = src.pointcloud2.topic.c_str(); break;
     case SourceType::kLibcamera:
       ctx.source =
@@ -414,7 +444,8 @@ Status Runtime::write_timing_report(const char* json_path) const {
   double hz = 0;  // 0: no camera period (a replay as fast as taken, a LiDAR's own rate)
   switch (src.type) {
     case SourceType::kReplay:
-    case SourceType::kLidarReplay: hz = src.replay.recorded ? 0 : src.replay.rate_hz; break;
+    case SourceType::kLidarReplay:
+    case SourceType::kMcap: hz = src.replay.recorded ? 0 : src.replay.rate_hz; break;
     case SourceType::kPointCloud2: hz = 0; break;
     case SourceType::kLibcamera: hz = double(src.libcamera.fps); break;
     case SourceType::kV4l2: hz = double(src.v4l2.fps); break;

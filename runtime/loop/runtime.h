@@ -36,6 +36,7 @@
 #include "runtime/loop/pose_outputs.h"
 #include "runtime/loop/process_memory.h"
 #include "runtime/loop/publisher.h"
+#include "runtime/loop/recorder.h"
 #include "runtime/loop/run_stats.h"
 #include "runtime/loop/supervision.h"
 #include "runtime/loop/timing_report.h"
@@ -83,6 +84,11 @@ class Runtime {
   }
   // After run(): the timing validation report (timing_report.h).
   Status write_timing_report(const char* json_path) const;
+  // Before run(): record the drive into `path` (recorder.h; the trigger
+  // camera's frames, every pose, the diagnostics). After run(): the file is
+  // closed and its summary line written to `line`.
+  Status start_recording(const std::string& path, int ring_frames);
+  Status finish_recording(char* line, size_t size);
 
  private:
   Runtime() = default;
@@ -109,6 +115,7 @@ class Runtime {
   std::unique_ptr<PoseOutputs> outputs_;
   std::unique_ptr<Publisher> publisher_;
   std::unique_ptr<Supervision> supervision_;
+  std::unique_ptr<Recorder> recorder_;  // declared after what offers to it: destroyed first
   pthread_t inference_{}, publish_{};
   bool inference_started_ = false, publish_started_ = false;
 

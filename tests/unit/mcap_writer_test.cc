@@ -12,9 +12,11 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "drivers/codec/mcap_reader.h"
 #include "drivers/codec/ros2_cdr.h"
 #include "runtime/base/crc32.h"
 
@@ -34,7 +36,7 @@ T at(const std::vector<uint8_t>& b, size_t off) {
 }
 
 // The sample every reader checks: 3 images, 3 poses, 2 diagnostics, 2 clouds.
-std::string write_sample(const std::string& path) {
+std::string write_sample(const std::string& path, bool with_large_image = true) {
   auto w = McapWriter::create(path.c_str(), "aprt test");
   EXPECT_TRUE(w) << w.error().message();
   McapWriter& m = *w.value();
@@ -80,6 +82,10 @@ std::string write_sample(const std::string& path) {
     const float pts[8] = {1.0f, 2.0f, 3.0f, 0.5f, -1.0f, -2.0f, 0.25f, 9.0f};
     const size_t k = ros2::pointcloud2_xyzi(buf.data(), buf.size(), t, "lidar", pts, 2);
     EXPECT_TRUE(m.write_message(c_pc, uint64_t(t), uint64_t(t), buf.data(), k));
+  }
+  if (!with_large_image) {  // the fuzzer's seed: small
+    EXPECT_TRUE(m.close());
+    return path;
   }
   // A message larger than the writer's buffer goes straight to the file.
   std::vector<uint8_t> big(640 * 480 * 3, 0x5a);
@@ -162,11 +168,82 @@ TEST(Mcap, RefusalsSayWhat) {
   std::remove(path.c_str());
 }
 
-// Writes the sample for the independent readers when asked (ctest fixture).
+// Writes the sample for the independent readers when asked (ctest fixture);
+// APRT_MCAP_SEED: the small one the fuzzer's corpus holds (tests/fuzz/corpus/mcap).
 TEST(Mcap, WriteSampleForIndependentReaders) {
   const char* out = std::getenv("APRT_MCAP_SAMPLE");
-  if (!out) GTEST_SKIP() << "APRT_MCAP_SAMPLE not set";
-  write_sample(out);
+  const char* seed = std::getenv("APRT_MCAP_SEED");
+  if (!out && !seed) GTEST_SKIP() << "APRT_MCAP_SAMPLE not set";
+  if (out) write_sample(out);
+  if (seed) write_sample(seed, false);
+}
+
+// The reader on what aprt writes, on a recording cut short, and on files it refuses.
+TEST(Mcap, ReaderReadsItsOwnFilesAndRefusesWithReasons) {
+  const std::string path = testing::TempDir() + "/aprt_mcap_reader.mcap";
+  write_sample(path);
+  const std::vector<std::string> kinds = {"sensor_msgs/msg/Image", "sensor_msgs/msg/PointCloud2"};
+  {
+    auto r = McapReader::open(path.c_str(), "", kinds);
+    ASSERT_TRUE(r) << r.error().message();
+    EXPECT_EQ(r.value()->channel().topic, "/aprt/image");
+    EXPECT_EQ(r.value()->size(), 4u);
+    EXPECT_FALSE(r.value()->truncated());
+    size_t n = 0;
+    auto b = r.value()->read(1, &n);
+    ASSERT_TRUE(b);
+    ros2::ImageMsg img;
+    ASSERT_TRUE(ros2::read_image(b.value(), n, &img));
+    EXPECT_EQ(img.width, 5u);
+    EXPECT_STREQ(img.encoding, "rgb8");
+    EXPECT_EQ(img.data[0], 1);  // k * 7 + i, i = 1
+    EXPECT_EQ(img.stamp_ns, 1796000000LL * 1000000000LL + 5 + 40000000LL);
+    EXPECT_FALSE(ros2::read_pointcloud2(b.value(), n, &*std::make_unique<ros2::PointCloud2Msg>()));
+  }
+  {
+    auto r = McapReader::open(path.c_str(), "/points_raw", kinds);
+    ASSERT_TRUE(r) << r.error().message();
+    size_t n = 0;
+    auto b = r.value()->read(0, &n);
+    ASSERT_TRUE(b);
+    ros2::PointCloud2Msg pc;
+    ASSERT_TRUE(ros2::read_pointcloud2(b.value(), n, &pc));
+    EXPECT_EQ(pc.width, 2u);
+    EXPECT_EQ(pc.n_fields, 4);
+    EXPECT_STREQ(pc.fields[3].name, "intensity");
+  }
+  auto none = McapReader::open(path.c_str(), "/nothing", kinds);
+  ASSERT_FALSE(none);
+  EXPECT_NE(std::string(none.error().message()).find("/aprt/image (sensor_msgs/msg/Image)"),
+            std::string::npos)
+      << none.error().message();  // the channels it has are listed
+  // Cut inside the large image: the whole records before it are kept.
+  auto bytes = read_all(path);
+  const std::string cut = testing::TempDir() + "/aprt_mcap_cut.mcap";
+  std::ofstream(cut, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size() - 400000));
+  {
+    auto r = McapReader::open(cut.c_str(), "", kinds);
+    ASSERT_TRUE(r) << r.error().message();
+    EXPECT_TRUE(r.value()->truncated());
+    EXPECT_EQ(r.value()->size(), 3u);
+  }
+  // Not MCAP; a chunk record.
+  std::ofstream(cut, std::ios::binary) << "not an mcap file at all";
+  auto bad = McapReader::open(cut.c_str(), "", kinds);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(std::string(bad.error().message()).find("not an MCAP file"), std::string::npos);
+  std::vector<uint8_t> chunked(bytes.begin(), bytes.begin() + 8);
+  const uint8_t chunk[9] = {0x06, 4, 0, 0, 0, 0, 0, 0, 0};
+  chunked.insert(chunked.end(), chunk, chunk + 9);
+  chunked.insert(chunked.end(), 4, 0);
+  std::ofstream(cut, std::ios::binary)
+      .write(reinterpret_cast<const char*>(chunked.data()), std::streamsize(chunked.size()));
+  auto ch = McapReader::open(cut.c_str(), "", kinds);
+  ASSERT_FALSE(ch);
+  EXPECT_NE(std::string(ch.error().message()).find("chunked"), std::string::npos);
+  std::remove(cut.c_str());
+  std::remove(path.c_str());
 }
 
 }  // namespace

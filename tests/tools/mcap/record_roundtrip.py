@@ -1,0 +1,53 @@
+#!/usr/bin/env python3
+"""`aprt run --record` and `source.type: mcap`, end to end:
+
+  record_roundtrip.py APRT WORKDIR SEQUENCE -- RUN_ARGS...
+
+1. aprt run RUN_ARGS --replay SEQUENCE --record WORKDIR/a.mcap   (a replayed drive, recorded)
+2. aprt run RUN_ARGS --replay WORKDIR/a.mcap --record WORKDIR/b.mcap
+3. the independent readers (node, npm @mcap/core and Foxglove's ROS 2
+   deserialiser): a.mcap well formed and decodable (mcap_check.js), and b.mcap
+   the same drive -- frames, stamps, every estimate bit for bit, published
+   poses (mcap_roundtrip.js).
+Both runs must end 0 with nothing dropped and no write error.
+"""
+import os
+import re
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def run(cmd):
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    out = p.stdout + p.stderr
+    print('$ ' + ' '.join(cmd) + '\n' + out)
+    if p.returncode != 0:
+        sys.exit(f'FAIL: exit {p.returncode}')
+    return out
+
+
+def main():
+    aprt, work, sequence = sys.argv[1], sys.argv[2], sys.argv[3]
+    args = sys.argv[sys.argv.index('--') + 1:]
+    os.makedirs(work, exist_ok=True)
+    a, b = os.path.join(work, 'a.mcap'), os.path.join(work, 'b.mcap')
+    for f in (a, b):
+        if os.path.exists(f):
+            os.remove(f)
+    for out in (run([aprt, 'run'] + args + ['--replay', sequence, '--record', a]),
+                run([aprt, 'run'] + args + ['--replay', a, '--record', b])):
+        m = re.search(r'^record: .*: (\d+) frames, .*dropped \(ring full\) (\d+) frames, (\d+) poses, '
+                      r'(\d+) diagnostics; (\d+) write errors', out, re.M)
+        if not m:
+            sys.exit('FAIL: no record summary line')
+        if int(m.group(1)) == 0 or any(int(m.group(k)) for k in (2, 3, 4, 5)):
+            sys.exit('FAIL: ' + m.group(0))
+    run(['node', os.path.join(HERE, 'mcap_check.js'), a])
+    run(['node', os.path.join(HERE, 'mcap_roundtrip.js'), a, b])
+    print('ok')
+
+
+if __name__ == '__main__':
+    main()
