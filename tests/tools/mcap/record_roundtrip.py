@@ -9,8 +9,10 @@
    deserialiser): a.mcap well formed and decodable (mcap_check.js), and b.mcap
    the same drive -- frames, stamps, every estimate bit for bit, published
    poses (mcap_roundtrip.js).
-Both runs must end 0 with nothing dropped and no write error.
+Both runs must end 0 with nothing dropped and no write error, and the first
+allocate nothing after its first pose (`--timing`'s process-wide counter).
 """
+import json
 import os
 import re
 import subprocess
@@ -36,7 +38,8 @@ def main():
     for f in (a, b):
         if os.path.exists(f):
             os.remove(f)
-    for out in (run([aprt, 'run'] + args + ['--replay', sequence, '--record', a]),
+    timing = os.path.join(work, 'timing.json')
+    for out in (run([aprt, 'run'] + args + ['--replay', sequence, '--record', a, '--timing', timing]),
                 run([aprt, 'run'] + args + ['--replay', a, '--record', b])):
         m = re.search(r'^record: .*: (\d+) frames, .*dropped \(ring full\) (\d+) frames, (\d+) poses, '
                       r'(\d+) diagnostics; (\d+) write errors', out, re.M)
@@ -44,6 +47,13 @@ def main():
             sys.exit('FAIL: no record summary line')
         if int(m.group(1)) == 0 or any(int(m.group(k)) for k in (2, 3, 4, 5)):
             sys.exit('FAIL: ' + m.group(0))
+    # Recording adds nothing to what the loop allocates (the process's
+    # counter; builds without one report none).
+    with open(timing) as f:
+        allocations = json.load(f)['memory'].get('allocations_after_first_pose')
+    print(f'allocations after the first pose while recording: {allocations}')
+    if allocations:
+        sys.exit('FAIL: the loop allocated while recording')
     run(['node', os.path.join(HERE, 'mcap_check.js'), a])
     run(['node', os.path.join(HERE, 'mcap_roundtrip.js'), a, b])
     print('ok')
