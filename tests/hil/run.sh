@@ -56,6 +56,20 @@ copy_with_libs() {  # binary, destination folder in the VM
   done
 }
 copy_with_libs "$build/bin/aprt" /aprt/bin
+# libcamera (camera_vimc): aprt's module, libcamera's vimc IPA with its proxy
+# and data, each with its libraries.
+if [ -f "$build/lib/aprt/aprt_libcamera.so" ]; then
+  mkdir -p "$root/aprt/lib/aprt"
+  copy_with_libs "$build/lib/aprt/aprt_libcamera.so" /aprt/lib/aprt
+  lcdir=/usr/lib/x86_64-linux-gnu/libcamera
+  if [ -f "$lcdir/ipa_vimc.so" ]; then
+    mkdir -p "$root$lcdir" "$root/usr/share/libcamera/ipa"
+    copy_with_libs "$lcdir/ipa_vimc.so" "$lcdir"
+    cp "$lcdir/ipa_vimc.so.sign" "$root$lcdir/" 2>/dev/null || true
+    copy_with_libs "$lcdir/vimc_ipa_proxy" "$lcdir"
+    cp -r /usr/share/libcamera/ipa/vimc "$root/usr/share/libcamera/ipa/"
+  fi
+fi
 for t in candump cansend; do copy_with_libs "/usr/bin/$t" /usr/bin; done
 copy_with_libs "$(command -v ip)" /usr/bin
 cp "$top/config/aprt_pose.dbc" "$root/aprt/config/"
@@ -90,6 +104,29 @@ for m in $mods; do
   done
 done
 echo "$load" > "$root/etc/hil-modules"
+# vimc, built for this kernel (tests/hil/vimc.sh), with the modules it needs;
+# the camera_vimc scenario loads it, or skips with the reason it is missing.
+if vimc=$("$here/vimc.sh" "$kdir" 2>"$work/vimc.err"); then
+  mkdir -p "$root/lib/modules/$kver/extra"
+  cp "$vimc" "$root/lib/modules/$kver/extra/vimc.ko"
+  deps=$(strings "$vimc" | sed -n 's/^depends=//p' | tr ',' ' ')
+  for m in $deps; do
+    line=$(grep -E "/${m//[-_]/[-_]}\.ko(\.xz)?:" "$mroot/modules.dep" || true)
+    [ -n "$line" ] || fail "vimc needs $m, not in $kver's modules.dep"
+    for f in ${line/:/ }; do
+      mkdir -p "$root/lib/modules/$kver/$(dirname "$f")"
+      cp "$mroot/$f" "$root/lib/modules/$kver/$f"
+    done
+  done
+  echo "$deps" > "$root/etc/hil-vimc-deps"
+  # udevd (udevadm under its daemon's name): libcamera takes only devices
+  # udev initialised and learns of unplugs from udev's events.
+  copy_with_libs "$(dirname "$vimc")/udevadm" /usr/bin
+  mkdir -p "$root/lib/systemd"
+  ln -sf /usr/bin/udevadm "$root/lib/systemd/systemd-udevd"
+else
+  { echo "vimc.ko could not be built for $kver:"; cat "$work/vimc.err"; } | tr '\n' ' ' > "$root/hil/vimc-skip"
+fi
 
 cat > "$root/init" <<'INIT'
 #!/bin/busybox sh

@@ -13,6 +13,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstdlib>
@@ -71,6 +72,25 @@ std::string camera_list_text(libcamera::CameraManager& cm) {
   return s.empty() ? "none" : s;
 }
 
+// A camera that stopped delivering while streaming -- unplugged without
+// libcamera hearing of it (no hotplug event: no udevd, or a device that hung)
+// -- is not stopped: libcamera 0.0.3 then waits for requests a dead device
+// never returns and aborts on the assertion that none are pending
+// (PipelineHandler::stop()). Such a camera, its buffers and requests are set
+// aside here for the rest of the process instead; never freed (freeing them
+// calls into the dead pipeline too). A few per unplug: bounded by the unplugs.
+struct Abandoned {
+  std::shared_ptr<libcamera::CameraManager> cm;
+  std::shared_ptr<libcamera::Camera> camera;
+  std::unique_ptr<libcamera::CameraConfiguration> config;
+  std::unique_ptr<libcamera::FrameBufferAllocator> allocator;
+  std::vector<std::unique_ptr<libcamera::Request>> requests;
+};
+std::vector<Abandoned*>& abandoned() {
+  static auto* list = new std::vector<Abandoned*>();  // never destroyed: see above
+  return *list;
+}
+
 }  // namespace
 
 struct LibcameraSource::Impl {
@@ -95,6 +115,12 @@ struct LibcameraSource::Impl {
   };
   std::vector<std::vector<PlaneView>> planes;
   bool acquired = false, started = false, streaming = false;
+  // Requests carry the generation of the opening they belong to (the
+  // cookie's high half): a late completion from an abandoned camera is ignored.
+  std::atomic<uint32_t> generation{0};
+  std::atomic<int64_t> last_complete_ns{0};  // libcamera's thread -> the capture thread
+  int64_t opened_ns = 0;
+  int64_t stall_ns = 2000000000;  // nothing for this long while streaming: gone
   int event_fd = -1;
   // Completed requests, libcamera's thread -> the capture thread (SPSC).
   static constexpr uint32_t kRing = 64;
@@ -114,6 +140,8 @@ struct LibcameraSource::Impl {
   // libcamera's thread: no allocation, no lock, no wait.
   void on_complete(libcamera::Request* r) {
     if (r->status() == libcamera::Request::RequestCancelled) return;
+    if (uint32_t(r->cookie() >> 32) != generation.load(std::memory_order_acquire)) return;
+    last_complete_ns.store(monotonic_ns(), std::memory_order_release);
     const uint32_t h = head.load(std::memory_order_relaxed);
     if (h - tail.load(std::memory_order_acquire) >= kRing)
       return;  // cannot happen: kRing > buffers
@@ -127,7 +155,7 @@ struct LibcameraSource::Impl {
   }
 
   Status open();
-  void close();
+  void close(bool vanished = false);
   Status fail(Errc code, const char* fmt_text, const std::string& a, const std::string& b = "") {
     error = Error(code, fmt_text, a.c_str(), b.c_str());
     return error;
@@ -177,6 +205,7 @@ Expected<std::unique_ptr<LibcameraSource>> LibcameraSource::create(const Libcame
     return Error(Errc::kIo, "libcamera: eventfd: %s", std::strerror(errno));
   }
   m.retry_delay_ns = o.retry_ns;
+  m.stall_ns = std::max<int64_t>(2000000000, 5000000000LL / o.fps);  // 2 s, or 5 frames
   Error err;
   m.cm = shared_manager(&err);
   if (!m.cm) return err;
@@ -227,6 +256,16 @@ Status LibcameraSource::Impl::open() {
     if (!camera) {
       return fail(Errc::kNotFound, "libcamera: no camera '%s' (cameras: %s)", o.camera,
                   camera_list_text(*cm));
+    }
+  }
+  for (const Abandoned* a : abandoned()) {
+    if (a->camera == camera) {
+      const std::string id = camera->id();
+      camera.reset();
+      return fail(Errc::kNotFound,
+                  "libcamera: camera '%s' has not come back (the one that stopped delivering is "
+                  "set aside; libcamera has announced no new one)",
+                  id);
     }
   }
   if (camera->acquire() != 0) {
@@ -294,7 +333,8 @@ Status LibcameraSource::Impl::open() {
       maps.push_back({addr, len});
       planes[i].push_back({static_cast<const uint8_t*>(addr) + p.offset, p.length});
     }
-    std::unique_ptr<libcamera::Request> r = camera->createRequest(i);
+    std::unique_ptr<libcamera::Request> r =
+        camera->createRequest((uint64_t(generation.load()) << 32) | i);
     if (!r || r->addBuffer(stream, buffers[i].get()) != 0) {
       return fail(Errc::kIo, "libcamera: camera '%s': cannot create a request", camera->id());
     }
@@ -313,6 +353,8 @@ Status LibcameraSource::Impl::open() {
     return fail(Errc::kIo, "libcamera: camera '%s' did not start streaming", camera->id());
   }
   started = true;
+  opened_ns = monotonic_ns();
+  last_complete_ns.store(0, std::memory_order_release);
   for (auto& r : requests) {
     if (camera->queueRequest(r.get()) != 0) {
       return fail(Errc::kIo, "libcamera: camera '%s' refused a request", camera->id());
@@ -322,7 +364,27 @@ Status LibcameraSource::Impl::open() {
   return ok();
 }
 
-void LibcameraSource::Impl::close() {
+void LibcameraSource::Impl::close(bool vanished) {
+  generation.fetch_add(1, std::memory_order_acq_rel);  // what is still queued is not ours now
+  if (camera && vanished && started) {
+    camera->requestCompleted.disconnect(this);
+    camera->disconnected.disconnect(this);
+    for (Map& m : maps) munmap(m.addr, m.length);
+    maps.clear();
+    planes.clear();
+    auto* a = new (std::nothrow) Abandoned{cm, std::move(camera), std::move(config),
+                                           std::move(allocator), std::move(requests)};
+    if (a) abandoned().push_back(a);  // out of memory: leaked all the same, never stopped
+    camera.reset();
+    acquired = started = streaming = false;
+    requests.clear();
+    head.store(0);
+    tail.store(0);
+    uint64_t drain;
+    while (event_fd >= 0 && read(event_fd, &drain, sizeof drain) > 0) {
+    }
+    return;
+  }
   if (camera) {
     if (started) camera->stop();  // completes what is queued as cancelled
     camera->requestCompleted.disconnect(this);
@@ -380,6 +442,17 @@ SourceResult LibcameraSource::next(FrameBuffer* dst, int64_t timeout_ns) {
     ++m.reopens;
     m.retry_delay_ns = m.o.retry_ns;
   }
+  const int64_t last = std::max(m.last_complete_ns.load(std::memory_order_acquire), m.opened_ns);
+  if (!m.gone.load(std::memory_order_acquire) && monotonic_ns() - last > m.stall_ns) {
+    m.error = Error(Errc::kIo,
+                    "libcamera: camera '%s' delivered nothing for %.1f s (unplugged without a "
+                    "hotplug event, or hung): set aside, reopening with back-off",
+                    m.camera ? m.camera->id().c_str() : m.o.camera.c_str(),
+                    double(monotonic_ns() - last) * 1e-9);
+    m.close(/*vanished=*/true);
+    m.retry_at_ns = monotonic_ns() + m.retry_delay_ns;
+    return SourceResult::kFailed;
+  }
   if (m.tail.load(std::memory_order_relaxed) == m.head.load(std::memory_order_acquire) &&
       !m.gone.load(std::memory_order_acquire)) {
     pollfd p{m.event_fd, POLLIN, 0};
@@ -404,7 +477,8 @@ SourceResult LibcameraSource::next(FrameBuffer* dst, int64_t timeout_ns) {
   SourceResult result = SourceResult::kFrame;
   const auto it = req->buffers().find(m.stream);
   libcamera::FrameBuffer* fb = it == req->buffers().end() ? nullptr : it->second;
-  const size_t cookie = size_t(req->cookie());
+  const size_t cookie =
+      size_t(req->cookie() & 0xffffffffu);  // the buffer; above it, the generation
   if (!fb || cookie >= m.planes.size()) {
     m.error = Error(Errc::kIo, "libcamera: a request came back without its buffer");
     result = SourceResult::kSkipped;
