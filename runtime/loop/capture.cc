@@ -42,6 +42,22 @@ Expected<std::unique_ptr<CaptureChannel>> open_channel(const Config::Camera& cam
                     : src.type == SourceType::kPointCloud2 ? uint64_t(src.pointcloud2.frames)
                                                            : 0;
   ch->source = std::move(opened->source);
+  // A camera is started here, once: a configuration it can never deliver
+  // (a size or format it does not offer) is refused at start-up, naming what
+  // it offers. One that is absent or fails otherwise is retried with back-off
+  // by its capture thread.
+  if (src.type == SourceType::kV4l2 || src.type == SourceType::kLibcamera) {
+    Status s = ch->source->start();
+    if (!s && s.error().code() == Errc::kUnsupported) {
+      if (count == 1) return s.error();
+      return Error(s.error().code(), "run: camera %s: %s", cam.name.c_str(), s.error().message());
+    }
+    ch->source_started = bool(s);
+    if (!s) {
+      std::fprintf(stderr, "aprt run: %s (retrying with back-off)\n", s.error().message());
+      ch->failed.store(true);
+    }
+  }
   auto slot = FrameSlot::create(ch->source->max_frame_bytes());
   if (!slot) return slot.error();
   ch->slot = std::move(slot.value());
@@ -68,7 +84,9 @@ void* capture_thread(void* channel) {
   const bool primary = c.index == 0;  // deliberate camera stalls hit the trigger camera
   const char* prefix = channels > 1 ? c.name.c_str() : "";
   const char* sep = channels > 1 ? ": " : "";
-  if (Status s = c.source->start(); !s) {
+  if (c.source_started || c.failed.load()) {
+    // Started (or reported failing) at open_channel(): next() reopens with back-off.
+  } else if (Status s = c.source->start(); !s) {
     std::fprintf(stderr, "aprt run: %s%s%s%s\n", prefix, sep, s.error().message(),
                  device ? " (retrying with back-off)" : "");
     c.failed.store(true);

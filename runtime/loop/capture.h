@@ -37,6 +37,7 @@ struct CaptureChannel {
   std::atomic<int64_t> beat{0};
   std::atomic<uint64_t> captured{0};
   uint64_t frame_limit = 0;
+  bool source_started = false;   // a camera started at open_channel() (its thread does not again)
   Recorder* recorder = nullptr;  // the trigger camera's, when the run records (recorder.h)  // a
                                  // device's `frames`: done after this many (0: no limit)
   // inference thread only

@@ -27,6 +27,14 @@ captured=$(sed -n 's/^summary: \([0-9]*\) frames captured.*/\1/p' /tmp/run.txt)
 poses=$(sed -n 's/.* \([0-9]*\) poses (.*/\1/p' /tmp/run.txt)
 [ "${captured:-0}" -eq 20 ]; check "20 frames from libcamera ($captured)" [ $? -eq 0 ]
 [ "${poses:-0}" -ge 1 ]; check "poses from them ($poses)" [ $? -eq 0 ]
+# A size the camera cannot give: refused at start, naming what it would give.
+sed 's/width: 636/width: 640/' /hil/camera_vimc.yaml > /tmp/640.yaml
+/aprt/bin/aprt run --config /tmp/640.yaml > /tmp/640.txt 2>&1
+code=$?
+grep -v WARN /tmp/640.txt | sed 's/^/# 640: /'
+grep -q "cannot deliver RGB24 at 640x480 (it would give .*x480" /tmp/640.txt
+[ $? -eq 0 ] && [ $code -eq 2 ]
+check "640x480 refused at start (exit $code), naming the size it would give" [ $? -eq 0 ]
 # Unplugged mid-stream (vimc unbound), then SIGTERM while it is gone: the
 # source notices the silence (libcamera 0.0.3's vimc handler sends no
 # disconnect), sets the camera aside without stopping it (stopping a dead
