@@ -126,6 +126,9 @@ void PoseOutputs::publish(const PoseRecord& r, int64_t now_ns,
   const int64_t stamp_ns =
       r.source_stamp_ns ? r.source_stamp_ns : r.capture_ns + realtime_offset_ns;
   const bool valid = r.flags == 0 && r.state == RunState::kRunning;
+  const double published_position[3] = {last_.position.x(), last_.position.y(), last_.position.z()};
+  const double published_wxyz[4] = {last_.orientation.w(), last_.orientation.x(),
+                                    last_.orientation.y(), last_.orientation.z()};
   if (recorder_) {
     RecordedPose p;
     p.stamp_ns = stamp_ns;
@@ -134,11 +137,8 @@ void PoseOutputs::publish(const PoseRecord& r, int64_t now_ns,
     p.flags = r.flags;
     p.state = uint8_t(r.state);
     p.published = valid;
-    for (int k = 0; k < 3; ++k) p.position[k] = last_.position[k];
-    p.orientation[0] = last_.orientation.w();
-    p.orientation[1] = last_.orientation.x();
-    p.orientation[2] = last_.orientation.y();
-    p.orientation[3] = last_.orientation.z();
+    std::memcpy(p.position, published_position, sizeof p.position);
+    std::memcpy(p.orientation, published_wxyz, sizeof p.orientation);
     std::memcpy(p.covariance, last_.covariance, sizeof p.covariance);
     std::memcpy(p.estimate_position, r.pose.position, sizeof p.estimate_position);
     std::memcpy(p.estimate_orientation, r.pose.orientation, sizeof p.estimate_orientation);
@@ -152,11 +152,8 @@ void PoseOutputs::publish(const PoseRecord& r, int64_t now_ns,
     if (valid) {
       DdsPose p;
       p.stamp_ns = stamp_ns;
-      for (int k = 0; k < 3; ++k) p.position[k] = last_.position[k];
-      p.orientation[0] = last_.orientation.w();
-      p.orientation[1] = last_.orientation.x();
-      p.orientation[2] = last_.orientation.y();
-      p.orientation[3] = last_.orientation.z();
+      std::memcpy(p.position, published_position, sizeof p.position);
+      std::memcpy(p.orientation, published_wxyz, sizeof p.orientation);
       std::memcpy(p.covariance, last_.covariance, sizeof p.covariance);
       if (dds_->publish_pose(p)) {
         ++stats_.dds_poses;

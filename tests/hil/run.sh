@@ -95,14 +95,16 @@ load="can can_raw can_dev vcan softdog"
 mroot="$kdir/root/lib/modules/$kver"
 mkdir -p "$root/lib/modules/$kver"
 cp "$mroot"/modules.{dep,alias,builtin,order} "$root/lib/modules/$kver/" 2>/dev/null || true
-for m in $mods; do
-  line=$(grep -E "/${m//_/[-_]}\.ko(\.xz)?:" "$mroot/modules.dep" || true)
-  [ -n "$line" ] || fail "module $m not in $kver's modules.dep"
+copy_module() {  # a module of the kernel and what it depends on, from modules.dep
+  local line
+  line=$(grep -E "/${1//[-_]/[-_]}\.ko(\.xz)?:" "$mroot/modules.dep" || true)
+  [ -n "$line" ] || fail "module $1 not in $kver's modules.dep"
   for f in ${line/:/ }; do
     mkdir -p "$root/lib/modules/$kver/$(dirname "$f")"
     cp "$mroot/$f" "$root/lib/modules/$kver/$f"
   done
-done
+}
+for m in $mods; do copy_module "$m"; done
 echo "$load" > "$root/etc/hil-modules"
 # vimc, built for this kernel (tests/hil/vimc.sh), with the modules it needs;
 # the camera_vimc scenario loads it, or skips with the reason it is missing.
@@ -110,14 +112,7 @@ if vimc=$("$here/vimc.sh" "$kdir" 2>"$work/vimc.err"); then
   mkdir -p "$root/lib/modules/$kver/extra"
   cp "$vimc" "$root/lib/modules/$kver/extra/vimc.ko"
   deps=$(strings "$vimc" | sed -n 's/^depends=//p' | tr ',' ' ')
-  for m in $deps; do
-    line=$(grep -E "/${m//[-_]/[-_]}\.ko(\.xz)?:" "$mroot/modules.dep" || true)
-    [ -n "$line" ] || fail "vimc needs $m, not in $kver's modules.dep"
-    for f in ${line/:/ }; do
-      mkdir -p "$root/lib/modules/$kver/$(dirname "$f")"
-      cp "$mroot/$f" "$root/lib/modules/$kver/$f"
-    done
-  done
+  for m in $deps; do copy_module "$m"; done
   echo "$deps" > "$root/etc/hil-vimc-deps"
   # udevd (udevadm under its daemon's name): libcamera takes only devices
   # udev initialised and learns of unplugs from udev's events.
