@@ -14,8 +14,6 @@ PACKAGES=(
   libyaml-dev libpng-dev libjpeg-dev libeigen3-dev cyclonedds-dev cyclonedds-tools libsodium-dev libcamera-dev libcamera-ipa
   # the Fast DDS peer of the tests (ROS 2's default middleware; tests/peers)
   libfastrtps-dev fastddsgen default-jre-headless util-linux
-  # independent MCAP readers of the tests (npm @mcap/core, Foxglove's; tests/tools/mcap)
-  nodejs npm
   # CAN tools (cansend/candump, for the HIL rig and by hand)
   can-utils
   # worst-case timing runs under CPU load (docs/timing.md)
@@ -36,6 +34,12 @@ missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# Node.js and npm for the tests' independent MCAP readers (tests/tools/mcap):
+# any node >= 18 with npm will do (a machine may carry NodeSource's, whose
+# nodejs bundles npm and conflicts with Debian's npm package); Debian's otherwise.
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
+  missing+=(nodejs npm)
+fi
 if ((${#missing[@]})); then
   SUDO=""
   if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
