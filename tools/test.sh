@@ -36,12 +36,12 @@ case "${1:-}" in
     ;;
   --fuzz)
     # Every libFuzzer target (tools/fuzz.sh), SECONDS split among them:
-    # the model file a third, the other nine the rest.
+    # the model file a third, the other ten the rest.
     seconds="${2:-60}"
     tools/fuzz.sh "$((seconds / 3 > 1 ? seconds / 3 : 1))" model_file_fuzz
-    rest=$(( (seconds * 2 / 3) / 9 ))
+    rest=$(( (seconds * 2 / 3) / 10 ))
     tools/fuzz.sh "$((rest > 1 ? rest : 1))" pointcloud2_fuzz pcd_fuzz kitti_fuzz image_fuzz \
-      pose_list_fuzz frame_sidecar_fuzz candump_log_fuzz config_fuzz dbc_fuzz
+      pose_list_fuzz frame_sidecar_fuzz candump_log_fuzz config_fuzz dbc_fuzz mcap_fuzz
     ;;
   --tsan)
     cmake --preset tsan >/dev/null
