@@ -29,7 +29,8 @@ const char* ros_encoding(PixelFormat f) {
 }  // namespace
 
 struct Recorder::Rings {
-  // Frames: slots with their own storage, handed over by index.
+  // Frames: slots with their own storage (sized at run time, so not a
+  // SpscRing, whose items live inside it), handed over by index.
   struct Frame {
     FrameInfo info;
     int64_t stamp_ns = 0;
@@ -51,13 +52,12 @@ struct Recorder::Rings {
     char keys[kMax][32] = {};
     char values[kMax][48] = {};
   };
-  static constexpr size_t kStatusSlots = 16;
-  Status statuses[kStatusSlots];
-  alignas(64) std::atomic<uint64_t> status_head{0};
-  alignas(64) std::atomic<uint64_t> status_tail{0};
+  SpscRing<Status, 16> statuses;
+  Status status_in, status_out;  // the publisher's and the writer's copy (no 2 KiB on a stack)
 
   std::atomic<uint64_t> frames_dropped{0}, poses_dropped{0}, statuses_dropped{0};
-  std::atomic<uint64_t> frames_written{0}, poses_written{0}, statuses_written{0}, write_errors{0};
+  std::atomic<uint64_t> frames_written{0}, poses_written{0}, timings_written{0};
+  std::atomic<uint64_t> statuses_written{0}, write_errors{0};
   std::atomic<uint64_t> bytes{0};
 };
 
@@ -159,12 +159,7 @@ void Recorder::offer_status(int64_t stamp_ns, uint8_t level, const char* message
                             const char* const* keys, const char* const* values,
                             int count) noexcept {
   Rings& g = *rings_;
-  const uint64_t h = g.status_head.load(std::memory_order_relaxed);
-  if (h - g.status_tail.load(std::memory_order_acquire) == Rings::kStatusSlots) {
-    g.statuses_dropped.fetch_add(1, std::memory_order_relaxed);
-    return;
-  }
-  Rings::Status& s = g.statuses[h % Rings::kStatusSlots];
+  Rings::Status& s = g.status_in;
   s.stamp_ns = stamp_ns;
   s.level = level;
   std::snprintf(s.message, sizeof s.message, "%s", message);
@@ -173,7 +168,7 @@ void Recorder::offer_status(int64_t stamp_ns, uint8_t level, const char* message
     std::snprintf(s.keys[i], sizeof s.keys[i], "%s", keys[i]);
     std::snprintf(s.values[i], sizeof s.values[i], "%s", values[i]);
   }
-  g.status_head.store(h + 1, std::memory_order_release);
+  if (!g.statuses.push(s)) g.statuses_dropped.fetch_add(1, std::memory_order_relaxed);
 }
 
 bool Recorder::drain() noexcept {
@@ -225,12 +220,11 @@ bool Recorder::drain() noexcept {
     t.inference_start_ns = p.inference_start_ns;
     t.inference_end_ns = p.inference_end_ns;
     t.publish_ns = p.publish_ns;
-    std::atomic<uint64_t> ignored{0};
-    put(ch_timing_, p.stamp_ns, ros2::pose_timing(buf, cdr_cap_, o_.frame_id.c_str(), t), ignored);
+    put(ch_timing_, p.stamp_ns, ros2::pose_timing(buf, cdr_cap_, o_.frame_id.c_str(), t),
+        g.timings_written);
   }
-  for (uint64_t t = g.status_tail.load(std::memory_order_relaxed);
-       t != g.status_head.load(std::memory_order_acquire); ++t) {
-    const Rings::Status& s = g.statuses[t % Rings::kStatusSlots];
+  Rings::Status& s = g.status_out;
+  while (g.statuses.pop(&s)) {
     const char* keys[Rings::Status::kMax];
     const char* values[Rings::Status::kMax];
     for (int i = 0; i < s.count; ++i) {
@@ -241,7 +235,6 @@ bool Recorder::drain() noexcept {
         ros2::diagnostics(buf, cdr_cap_, s.stamp_ns, o_.frame_id.c_str(), s.level, "aprt: pose",
                           s.message, "aprt", keys, values, s.count),
         g.statuses_written);
-    g.status_tail.store(t + 1, std::memory_order_release);
   }
   g.bytes.store(m.bytes_written(), std::memory_order_relaxed);
   return wrote;
