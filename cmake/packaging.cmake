@@ -25,9 +25,12 @@ set(APRT_INSTALL_DATADIR ${CMAKE_INSTALL_DATADIR}/aprt)
 set(APRT_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/aprt)
 
 install(TARGETS aprt RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime)
-# The libcamera source's module, found from the binary as ../lib/aprt/.
+# The driver modules (libcamera, DDS), found from the binary as ../lib/aprt/.
 if(TARGET aprt_libcamera)
   install(TARGETS aprt_libcamera LIBRARY DESTINATION lib/aprt COMPONENT runtime)
+endif()
+if(TARGET aprt_dds_module)
+  install(TARGETS aprt_dds_module LIBRARY DESTINATION lib/aprt COMPONENT runtime)
 endif()
 install(FILES config/default.yaml config/autoware.yaml config/aprt_pose.dbc config/aprt.service
         DESTINATION ${APRT_INSTALL_DATADIR}/config COMPONENT runtime)

@@ -5,7 +5,8 @@
     kernels             <- base
     runtime/engine      <- base, kernels
     drivers             <- base (drivers/input and drivers/output never use each
-                           other; both may use drivers/codec and drivers/dds)
+                           other; both may use drivers/codec, drivers/dds,
+                           drivers/module and drivers/watchdog)
     the application     <- all of the above: runtime/config, runtime/pose,
                            runtime/loop, runtime/cli
 
@@ -27,6 +28,7 @@ LAYERS = [
     ("drivers/codec/", "drivers/shared"),
     ("drivers/dds/", "drivers/shared"),
     ("drivers/watchdog/", "drivers/shared"),
+    ("drivers/module/", "drivers/shared"),
     ("runtime/config/", APP),
     ("runtime/pose/", APP),
     ("runtime/loop/", APP),

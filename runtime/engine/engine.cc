@@ -273,20 +273,26 @@ bool Engine::fetch_from_file(void* context, uint64_t offset, uint64_t size) {
   return source->read(offset, size_t(size), const_cast<uint8_t*>(source->data) + offset);
 }
 
-// A section's checksum read from the file through a 1 MiB buffer.
+// A section's checksum read from the file through a 1 MiB buffer, mapped
+// for the call and unmapped after it: from malloc, a buffer this size stays
+// in the heap once glibc's mmap threshold has risen past it, resident for
+// the life of the process.
 bool Engine::crc_from_file(void* context, uint64_t offset, uint64_t size, uint32_t* crc) {
   const auto* source = static_cast<const Source*>(context);
   constexpr size_t kPiece = size_t(1) << 20;
-  std::unique_ptr<uint8_t[]> buf(new (std::nothrow) uint8_t[kPiece]);
-  if (!buf) return false;
+  void* map = mmap(nullptr, kPiece, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (map == MAP_FAILED) return false;
+  auto* buf = static_cast<uint8_t*>(map);
   uint32_t c = 0;
-  for (uint64_t at = 0; at < size; at += kPiece) {
+  bool ok = true;
+  for (uint64_t at = 0; ok && at < size; at += kPiece) {
     const size_t n = size_t(size - at < kPiece ? size - at : kPiece);
-    if (!source->read(offset + at, n, buf.get())) return false;
-    c = crc32(buf.get(), n, c);
+    ok = source->read(offset + at, n, buf);
+    if (ok) c = crc32(buf, n, c);
   }
+  munmap(map, kPiece);
   *crc = c;
-  return true;
+  return ok;
 }
 
 Expected<std::unique_ptr<Engine>> Engine::load_image(const Source& source,
@@ -355,20 +361,23 @@ Expected<std::unique_ptr<Engine>> Engine::load_image(const Source& source,
     if (e->arena_offsets_[i] != kNotInArena) e->tensors_[i].data = arena + e->arena_offsets_[i];
   }
   cursor = arena + round_up(m.arena_bytes, kAlign);
-  // Prefault: the arena and scratch are written once here, not during run()
-  // (the kept and packed weights are written when they are placed).
-  std::memset(arena, 0, required - size_t(arena - region));
+  const size_t working_bytes = required - size_t(arena - region);
   e->ctx_.scratch = reinterpret_cast<float*>(cursor);
   cursor += round_up(e->scratch_floats_ * sizeof(float), kAlign);
   for (int t = 0; t < options.threads; ++t) {
     e->ctx_.thread_scratch[t] = reinterpret_cast<float*>(cursor);
     cursor += round_up(e->thread_scratch_floats_ * sizeof(float), kAlign);
   }
-  if (Status s = e->place_constants(region, kept, source); !s) {
+  // The arena and scratch are still unused: they hold the file's weights on
+  // their way to being packed, so the load needs no buffer beside the block.
+  if (Status s = e->place_constants(region, kept, source, arena, working_bytes); !s) {
     e.reset();
     if (owned) munmap(region, required);
     return s.error();
   }
+  // Prefault: the arena and scratch are written once here, not during run()
+  // (the kept and packed weights are written when they are placed).
+  std::memset(arena, 0, working_bytes);
   if (options.threads > 1) {
     auto pool = ThreadPool::create(options.threads, options.cpus, options.n_cpus);
     if (!pool) {
@@ -396,8 +405,11 @@ Expected<std::unique_ptr<Engine>> Engine::load_image(const Source& source,
 
 // The tables and the kept constants are copied into the region, the others
 // packed by their ops (read from a file through a buffer of the largest op's
-// packed inputs); then nothing points into the source any more.
-Status Engine::place_constants(uint8_t* tables, uint8_t* kept, const Source& source) {
+// packed inputs: `spare`, the block's not yet used arena and scratch, when
+// they are large enough, else one allocated for the load); then nothing
+// points into the source any more.
+Status Engine::place_constants(uint8_t* tables, uint8_t* kept, const Source& source, uint8_t* spare,
+                               size_t spare_bytes) {
   const uint8_t* const file = source.data;
   const size_t hole = size_t(model_.weights_offset()), hole_bytes = size_t(model_.weights_bytes());
   const size_t size = size_t(model_.file_bytes());
@@ -424,15 +436,18 @@ Status Engine::place_constants(uint8_t* tables, uint8_t* kept, const Source& sou
     bounce_bytes = std::max(bounce_bytes, need);
   }
   std::unique_ptr<uint8_t[]> bounce;
+  uint8_t* bounce_at = nullptr;
   if (source.fd >= 0 && bounce_bytes > 0) {
-    bounce.reset(new (std::nothrow) uint8_t[bounce_bytes + kAlign]);
-    APRT_ENSURE(bounce != nullptr, Errc::kOutOfMemory,
-                "engine: out of memory for a %zu-byte load buffer", bounce_bytes);
+    if (bounce_bytes <= spare_bytes) {
+      bounce_at = spare;  // kAlign-aligned: the arena's start
+    } else {
+      bounce.reset(new (std::nothrow) uint8_t[bounce_bytes + kAlign]);
+      APRT_ENSURE(bounce != nullptr, Errc::kOutOfMemory,
+                  "engine: out of memory for a %zu-byte load buffer", bounce_bytes);
+      bounce_at =
+          reinterpret_cast<uint8_t*>(round_up(reinterpret_cast<uintptr_t>(bounce.get()), kAlign));
+    }
   }
-  uint8_t* const bounce_at =
-      bounce
-          ? reinterpret_cast<uint8_t*>(round_up(reinterpret_cast<uintptr_t>(bounce.get()), kAlign))
-          : nullptr;
   for (OpNode& n : nodes_) {
     if (!n.pack) continue;
     size_t used = 0;

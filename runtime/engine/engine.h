@@ -137,7 +137,8 @@ class Engine {
   static Expected<std::unique_ptr<Engine>> build(const uint8_t* data, size_t size,
                                                  const EngineOptions& options, bool plan_only,
                                                  size_t* required);
-  Status place_constants(uint8_t* tables, uint8_t* kept, const Source& source);
+  Status place_constants(uint8_t* tables, uint8_t* kept, const Source& source, uint8_t* spare,
+                         size_t spare_bytes);
   Status bind(const uint8_t* data, size_t size);
   Status prepare_ops();
   void plan(size_t* arena_bytes);

@@ -56,6 +56,11 @@ copy_with_libs() {  # binary, destination folder in the VM
   done
 }
 copy_with_libs "$build/bin/aprt" /aprt/bin
+# The DDS endpoints' module (Cyclone DDS and its libraries come with it).
+if [ -f "$build/lib/aprt/aprt_dds.so" ]; then
+  mkdir -p "$root/aprt/lib/aprt"
+  copy_with_libs "$build/lib/aprt/aprt_dds.so" /aprt/lib/aprt
+fi
 # libcamera (camera_vimc): aprt's module, libcamera's vimc IPA with its proxy
 # and data, each with its libraries.
 if [ -f "$build/lib/aprt/aprt_libcamera.so" ]; then

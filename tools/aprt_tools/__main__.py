@@ -138,6 +138,7 @@ def cmd_train(a):
 
     from .model.apr_transformer import AprConfig
 
+    resize = a.size if a.init else None  # a new input side for the initial model
     if a.size is None:
         a.size = 4096 if a.modality == "points" else 128
     preset = None
@@ -161,7 +162,7 @@ def cmd_train(a):
                            modality=a.modality, config=preset, inputs=a.inputs,
                            inputs_every=a.inputs_every, val=a.val, augment_from=a.augment_from,
                            init=a.init, workers=a.workers, uncertainty=a.uncertainty,
-                           ema=a.ema)
+                           ema=a.ema, resize=resize)
     except (OSError, ValueError) as e:
         print(f"train: {e}", file=sys.stderr)
         sys.exit(2)
@@ -328,7 +329,8 @@ def main(argv=None):
                    help="fraction of the budget before colour augmentation ramps in (image)")
     t.add_argument("--out", required=True)
     t.add_argument("--size", type=int, default=None,
-                   help="image side / BEV grid (default 128), or points sampled (default 4096)")
+                   help="image side / BEV grid (default 128), or points sampled (default 4096); "
+                        "with --init: an image model trained at a new input side")
     t.add_argument("--minutes", type=float, default=90.0, help="wall-clock training budget")
     t.add_argument("--batch", type=int, default=16)
     t.add_argument("--lr", type=float, default=1e-4)

@@ -50,7 +50,7 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
           warmup_steps: int = 200, modality: str = "image", config: AprConfig | None = None,
           inputs: str | None = None, inputs_every: int = 1, val: str | None = None,
           augment_from: float = 0.3, init: str | None = None, workers: int = 1,
-          uncertainty: bool = False, ema: float = 0.0, log=print):
+          uncertainty: bool = False, ema: float = 0.0, resize: int | None = None, log=print):
     """data: one sequence folder or a list of them (several drives, e.g. under
     different light), trained on together. val: a separate drive whose errors
     are reported each epoch and recorded as the model's `val_error`; without
@@ -64,6 +64,11 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     schedule and the augmentation curriculum start again over `minutes`.
     uncertainty: add the confidence heads (AprConfig.uncertainty) if the
     configuration has none; they learn the pose's error scales (uncertainty_nll).
+    resize: with `init` on an image model, train at this input side instead
+    of the initial model's (e.g. 64 -> 96): every convolution and the
+    transformer carry over unchanged; the learned position tables are indexed
+    from the top-left corner, so the larger feature maps also use cells the
+    smaller input never reached, which start from their initial values.
     ema: keep an exponential moving average of the weights with this decay per
     step (e.g. 0.999) and evaluate, save and export it; 0: the weights as trained.
     workers: data-parallel processes sharing `threads` (the batch is split
@@ -90,6 +95,16 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
             raise ValueError("give either a configuration or a checkpoint to start from, not both")
         checkpoint = _load_init(init, log)
         config = AprConfig.from_json(json.dumps(checkpoint["config"]))
+        file_size = config.image_size
+        if resize is not None and resize != file_size:
+            if config.points or config.bev:
+                raise ValueError("--size with --init changes an image model's input only")
+            side = 8 * config.pos_embed_cells
+            if resize % 32 or resize > side:
+                raise ValueError(f"input side {resize}: must be a multiple of 32 and at most "
+                                 f"{side} (the position tables' reach)")
+            log(f"train: input {file_size} -> {resize} (weights of the {file_size} model)")
+            config.image_size = resize
     if config is not None:
         cfg = AprConfig.from_json(config.to_json())
         modality = "points" if cfg.points else "bev" if cfg.bev else "image"
@@ -135,7 +150,7 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     if checkpoint is not None:
         state = checkpoint["model_state_dict"]
         if "bn_frames" in checkpoint:  # a model file: its BatchNorm re-estimated on these frames
-            state = _model_file_state(checkpoint, imgs[tr], cfg, log)
+            state = _model_file_state(checkpoint, imgs[tr], cfg, file_size, log)
         missing, unexpected = model.load_state_dict(state, strict=False)
         if unexpected or any(not (k.startswith("uncertainty_head") and not had_heads)
                              for k in missing):
@@ -192,13 +207,16 @@ def _load_init(init: str, log) -> dict:
     return checkpoint
 
 
-def _model_file_state(checkpoint: dict, frames: torch.Tensor, cfg, log) -> dict:
+def _model_file_state(checkpoint: dict, frames: torch.Tensor, cfg, file_size: int, log) -> dict:
     """The model file's network, its BatchNorm statistics estimated on 64 of
-    the training frames; checked against the file's own graph."""
+    the training frames (brought to the file's input side); checked against
+    the file's own graph."""
     from .model_bin import to_torch
 
     pick = torch.linspace(0, len(frames) - 1, 64).long()
     x = network_input(frames[pick], cfg)
+    if x.shape[-1] != file_size:
+        x = torch.nn.functional.interpolate(x, size=(file_size, file_size), mode="area")
     model, _ = to_torch.load(checkpoint["model_file"], x)
     worst = to_torch.check(checkpoint["model_file"], model, x[:4])
     if worst > 1e-3:

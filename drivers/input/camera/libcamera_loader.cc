@@ -3,14 +3,8 @@
 // from $APRT_LIBCAMERA_MODULE or ../lib/aprt/ beside the executable (the
 // package's /usr/lib/aprt/, the build tree's lib/aprt/). The module stays
 // loaded: libcamera's threads run its code until the process ends.
-#include <dlfcn.h>
-#include <unistd.h>
-
-#include <climits>
-#include <cstdlib>
-#include <cstring>
-
 #include "drivers/input/camera/libcamera_module.h"
+#include "drivers/module/driver_module.h"
 
 namespace aprt {
 namespace {
@@ -20,34 +14,21 @@ struct Module {
   Error error;
 };
 
-std::string module_path() {
-  if (const char* env = std::getenv("APRT_LIBCAMERA_MODULE"); env && *env) return env;
-  char exe[PATH_MAX];
-  const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-  if (n <= 0) return "aprt_libcamera.so";
-  exe[n] = '\0';
-  std::string dir(exe);
-  dir.resize(dir.rfind('/'));
-  return dir.substr(0, dir.rfind('/')) + "/lib/aprt/aprt_libcamera.so";
-}
-
 Module load_module() {
   Module m;
-  const std::string path = module_path();
-  void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-  if (!handle) {
-    m.error = Error(Errc::kUnsupported,
-                    "libcamera: cannot load the libcamera module %s: %s (is aprt installed whole? "
-                    "set APRT_LIBCAMERA_MODULE, or use source type v4l2)",
-                    path.c_str(), dlerror());
+  auto entry = open_driver_module("APRT_LIBCAMERA_MODULE", "aprt_libcamera.so",
+                                  APRT_LIBCAMERA_MODULE_SYMBOL, "libcamera",
+                                  "is aprt installed whole? set APRT_LIBCAMERA_MODULE, or use "
+                                  "source type v4l2");
+  if (!entry) {
+    m.error = entry.error();
     return m;
   }
-  auto entry = reinterpret_cast<LibcameraModuleEntry>(dlsym(handle, APRT_LIBCAMERA_MODULE_SYMBOL));
-  const LibcameraModuleApi* api = entry ? entry() : nullptr;
+  const LibcameraModuleApi* api = reinterpret_cast<LibcameraModuleEntry>(entry.value())();
   if (!api || api->abi != LibcameraModuleApi::kAbi) {
     m.error = Error(Errc::kUnsupported,
-                    "libcamera: %s is not this aprt's libcamera module (%s); reinstall aprt",
-                    path.c_str(), api ? "another interface version" : "no entry point");
+                    "libcamera: the libcamera module is not this aprt's (another interface "
+                    "version); reinstall aprt");
     return m;
   }
   m.api = api;

@@ -33,28 +33,30 @@ struct PointCloud2Stats {
   char last_refusal[Error::kCapacity] = {};
 };
 
+// Made by the DDS module (aprt_dds.so, drivers/dds/dds_module.h),
+// like DdsPublisher.
 class PointCloud2Reader {
  public:
   static constexpr int kMaxFields = 64;
 
   static Expected<std::unique_ptr<PointCloud2Reader>> create(const PointCloud2Options& options);
-  ~PointCloud2Reader();
+  virtual ~PointCloud2Reader() = default;
   PointCloud2Reader(const PointCloud2Reader&) = delete;
   PointCloud2Reader& operator=(const PointCloud2Reader&) = delete;
 
   // Waits up to timeout_ns for clouds, then decodes the newest into `out`.
   // true: `out` holds it and *stamp_ns its header stamp; false: nothing new
   // (or only malformed clouds: see stats()), `out` untouched.
-  bool take_latest(const PointRegion& region, PointCloud* out, int64_t timeout_ns,
-                   int64_t* stamp_ns);
+  virtual bool take_latest(const PointRegion& region, PointCloud* out, int64_t timeout_ns,
+                           int64_t* stamp_ns) = 0;
   const PointCloud2Stats& stats() const { return stats_; }
   // Writers matched on the topic right now.
-  int publishers() const;
-  static const char* type_name();
+  virtual int publishers() const = 0;
+  // ROS 2's name of the type on the wire (the module checks its generated type against it).
+  static const char* type_name() { return "sensor_msgs::msg::dds_::PointCloud2_"; }
 
- private:
+ protected:
   PointCloud2Reader() = default;
-  int32_t participant_ = 0, reader_ = 0, waitset_ = 0, domain_ = 0;
   PointCloud2Stats stats_;
 };
 

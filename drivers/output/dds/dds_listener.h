@@ -26,23 +26,23 @@ struct DdsReceivedStatus {
   char state[32];  // the "state" key's value, if present
 };
 
+// Made by the DDS module, like DdsPublisher.
 class DdsListener {
  public:
   // Same options as the publisher's (domain, topics, loopback profile, reliability).
   static Expected<std::unique_ptr<DdsListener>> create(const DdsOptions& options);
-  ~DdsListener();
+  virtual ~DdsListener() = default;
   DdsListener(const DdsListener&) = delete;
   DdsListener& operator=(const DdsListener&) = delete;
 
   // Waits up to timeout_ns for data, then takes up to n poses / statuses.
-  int take_poses(DdsReceivedPose* out, int n, int64_t timeout_ns);
-  int take_status(DdsReceivedStatus* out, int n);
+  virtual int take_poses(DdsReceivedPose* out, int n, int64_t timeout_ns) = 0;
+  virtual int take_status(DdsReceivedStatus* out, int n) = 0;
   // Writers matched on the pose topic right now.
-  int publishers() const;
+  virtual int publishers() const = 0;
 
- private:
+ protected:
   DdsListener() = default;
-  int32_t participant_ = 0, pose_reader_ = 0, diag_reader_ = 0, waitset_ = 0, domain_ = 0;
 };
 
 }  // namespace aprt

@@ -34,30 +34,33 @@ struct DdsPose {
   double covariance[36];
 };
 
+// Made by the DDS module (aprt_dds.so, drivers/dds/dds_module.h), opened by the first
+// create() of any DDS endpoint: a program that configures no DDS loads none
+// of Cyclone DDS's libraries (OpenSSL, iceoryx: ~3 MiB resident).
 class DdsPublisher {
  public:
   static Expected<std::unique_ptr<DdsPublisher>> create(const DdsOptions& options);
-  ~DdsPublisher();
+  virtual ~DdsPublisher() = default;
   DdsPublisher(const DdsPublisher&) = delete;
   DdsPublisher& operator=(const DdsPublisher&) = delete;
 
-  Status publish_pose(const DdsPose& pose) noexcept;
+  virtual Status publish_pose(const DdsPose& pose) noexcept = 0;
   // level: 0 OK, 1 WARN, 2 ERROR, 3 STALE. `message` is copied (truncated to 127 chars).
-  Status publish_status(int64_t stamp_ns, uint8_t level, const char* message,
-                        const char* const* keys, const char* const* values, int count) noexcept;
+  virtual Status publish_status(int64_t stamp_ns, uint8_t level, const char* message,
+                                const char* const* keys, const char* const* values,
+                                int count) noexcept = 0;
 
-  static const char* pose_type_name();
-  int32_t participant() const { return participant_; }
+  // ROS 2's name of the pose type on the wire (the module checks its
+  // generated type against it).
+  static const char* pose_type_name() {
+    return "geometry_msgs::msg::dds_::PoseWithCovarianceStamped_";
+  }
   // What the start-up discovery wait found (DdsOptions::discovery_wait_ms).
   const DdsDiscoveryReport& discovery() const { return discovery_; }
 
- private:
+ protected:
   DdsPublisher() = default;
-  int32_t participant_ = 0, pose_writer_ = 0, diag_writer_ = 0, domain_ = 0;
-  char frame_id_[64] = {};
   DdsDiscoveryReport discovery_;
-  struct Samples;
-  std::unique_ptr<Samples> samples_;
 };
 
 }  // namespace aprt
