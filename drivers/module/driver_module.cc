@@ -28,8 +28,8 @@ Expected<void*> open_driver_module(const char* env_var, const char* file, const 
   const std::string path = module_path(env_var, file);
   void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (!handle) {
-    return Error(Errc::kUnsupported, "%s: cannot load the module %s: %s (%s)", what,
-                 path.c_str(), dlerror(), hint);
+    return Error(Errc::kUnsupported, "%s: cannot load the module %s: %s (%s)", what, path.c_str(),
+                 dlerror(), hint);
   }
   void* entry = dlsym(handle, symbol);
   if (!entry) {

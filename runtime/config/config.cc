@@ -277,13 +277,14 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     const Node* out = root->get("output");
     APRT_TRY(r.map(out, "output",
                    {"console", "summary", "frame_id", "sigma_position_m", "sigma_orientation_deg",
-                    "status_rate_hz", "dds", "can"}));
+                    "status_rate_hz", "records", "dds", "can"}));
     APRT_TRY(r.boolean(out, "output", "console", &c.output.console));
     APRT_TRY(r.boolean(out, "output", "summary", &c.output.summary));
     APRT_TRY(r.str(out, "output", "frame_id", &c.output.frame_id, {}, /*non_empty=*/true));
     APRT_TRY(r.num(out, "output", "sigma_position_m", 0, 600, &c.output.sigma_position_m));
     APRT_TRY(r.num(out, "output", "sigma_orientation_deg", 0, 25, &c.output.sigma_orientation_deg));
     APRT_TRY(r.num(out, "output", "status_rate_hz", 0.1, 100, &c.output.status_rate_hz));
+    APRT_TRY(r.integer(out, "output", "records", 1024, 1 << 24, &c.output.records));
     const Node* dds = out ? out->get("dds") : nullptr;
     APRT_TRY(r.map(dds, "output.dds",
                    {"enabled", "domain", "pose_topic", "diagnostics_topic", "reliability", "depth",

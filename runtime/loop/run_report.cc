@@ -33,6 +33,10 @@ void print_run_summary(const RunSummary& s) {
         "median %.1f ms p99 %.1f ms max %.1f ms (%s kernels, %d thread%s)\n",
         quantile(infer, 0.5), quantile(infer, 0.99), quantile(infer, 1.0), quantile(e2e, 0.5),
         quantile(e2e, 0.99), quantile(e2e, 1.0), s.isa, s.threads, s.threads == 1 ? "" : "s");
+    if (s.timing_count < st.poses) {
+      std::printf("  (latency and errors of the first %zu poses: output.records is full)\n",
+                  s.timing_count);
+    }
   }
   if (s.lidar) {
     std::printf("lidar: %llu of %llu scans too sparse for the model (flagged)\n",

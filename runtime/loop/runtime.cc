@@ -58,11 +58,12 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
   r->outputs_ = std::move(outputs.value());
   r->ring_.reset(new (std::nothrow) PoseRing());
   // Per-pose records for the summary and --timing: the run's length when it is
-  // known, else 2^20 poses (9.7 h at 30 Hz; later poses are not recorded).
+  // known, else output.records (later poses are not recorded). Once 2^20
+  // here: 48 MiB, every page written and, with lock_memory, locked.
   const bool replay = c.source.replay_source();
   const size_t capacity = replay && c.source.replay.frames > 0 ? size_t(c.source.replay.frames) + 16
                           : replay && !c.source.replay.loop    ? frames + 16
-                                                               : size_t(1) << 20;
+                                                               : size_t(c.output.records);
   r->publisher_.reset(new (std::nothrow) Publisher(c, *r->ring_, *r->outputs_, r->shared_,
                                                    r->faults_, r->channels_[0]->scans(), capacity));
   if (!r->estimator_ || !r->ring_ || !r->publisher_) {

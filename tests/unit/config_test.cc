@@ -105,6 +105,19 @@ TEST(Config, ThreadStackSize) {
                  "threads.stack_kib: expected an integer in [128, 65536]");
 }
 
+// A live source keeps output.records poses for the summary (preallocated,
+// and locked with lock_memory): bounded, 65536 unless set.
+TEST(Config, PoseRecordsOfALiveSource) {
+  auto c = parse_config("model: m\nsource: {replay: {path: d}}\noutput: {records: 4096}\n", "t");
+  ASSERT_TRUE(c) << c.error().message();
+  EXPECT_EQ(c->output.records, 4096);
+  auto d = parse_config("model: m\nsource: {replay: {path: d}}\n", "t");
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->output.records, 65536);
+  expect_refused("model: m\nsource: {replay: {path: d}}\noutput: {records: 100}\n",
+                 "output.records: expected an integer in [1024, 16777216]");
+}
+
 TEST(Config, RecordedRate) {
   auto c = parse_config("model: m\nsource: {replay: {path: d, rate_hz: recorded}}\n", "t");
   ASSERT_TRUE(c) << c.error().message();
