@@ -39,6 +39,7 @@ def main():
         if os.path.exists(f):
             os.remove(f)
     timing = os.path.join(work, 'timing.json')
+    misses = 0
     for out in (run([aprt, 'run'] + args + ['--replay', sequence, '--record', a, '--timing', timing]),
                 run([aprt, 'run'] + args + ['--replay', a, '--record', b])):
         m = re.search(r'^record: .*: (\d+) frames, .*dropped \(ring full\) (\d+) frames, (\d+) poses, '
@@ -47,6 +48,8 @@ def main():
             sys.exit('FAIL: no record summary line')
         if int(m.group(1)) == 0 or any(int(m.group(k)) for k in (2, 3, 4, 5)):
             sys.exit('FAIL: ' + m.group(0))
+        d = re.search(r'^summary: .* (\d+) deadline misses', out, re.M)
+        misses += int(d.group(1)) if d else 0
     # Recording adds nothing to what the loop allocates (the process's
     # counter; builds without one report none).
     with open(timing) as f:
@@ -55,7 +58,13 @@ def main():
     if allocations:
         sys.exit('FAIL: the loop allocated while recording')
     run(['node', os.path.join(HERE, 'mcap_check.js'), a])
-    run(['node', os.path.join(HERE, 'mcap_roundtrip.js'), a, b])
+    # Which estimates go out as valid depends on the run's timing as well as
+    # its frames (a missed inference deadline withholds a pose and so moves
+    # the track): on a machine too busy to keep the deadline, the published
+    # poses are not compared; the frames and every estimate still are.
+    if misses:
+        print(f'{misses} deadline misses in the two runs: published poses not compared')
+    run(['node', os.path.join(HERE, 'mcap_roundtrip.js'), a, b] + (['--estimates-only'] if misses else []))
     print('ok')
 
 
