@@ -46,6 +46,10 @@ for path in ./usr/bin/aprt ./etc/aprt/aprt.yaml ./usr/lib/systemd/system/aprt.se
   grep -q " $path\$" <<<"$contents" || fail "no $path in the packages"
 done
 grep -q "cmake/aprt/aprtConfig.cmake\$" <<<"$contents" || fail "no aprtConfig.cmake in $dev"
+# The LiDAR model beside the camera's (issue #30).
+if [ -f model_bin/town_bev.aprt ]; then
+  grep -q " ./usr/share/aprt/model_bin/town_bev.aprt\$" <<<"$contents" || fail "no LiDAR model in $deb"
+fi
 # The DDS module where the build has DDS (the arm64 sysroot has no Cyclone DDS).
 if [ -f "$build/lib/aprt/aprt_dds.so" ]; then
   grep -q " ./usr/lib/aprt/aprt_dds.so\$" <<<"$contents" || fail "no DDS module in $deb"

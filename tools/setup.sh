@@ -69,4 +69,6 @@ for preset in release asan; do
   cmake --preset "$preset" >/dev/null
   cmake --build --preset "$preset" -j "$jobs"
 done
-echo "setup: done (build/release/bin/aprt, build/asan/bin/aprt)"
+# The LiDAR demo drive (config/lidar_demo.yaml) is rendered, not committed.
+tools/synth/lidar_demo_drive.sh data/lidar_demo_drive build/release/bin/aprt_synth
+echo "setup: done (build/release/bin/aprt, build/asan/bin/aprt, data/lidar_demo_drive)"

@@ -1,12 +1,13 @@
 // aprt eval --model MODEL --data DIR [--compare MODEL2] [--csv FILE] [--json] [--threads N]
-//           [--isa X] [--start N] [--every N] [--limit N] [--rate HZ] [--config FILE]
+//           [--isa X] [--start N] [--every N] [--limit N] [--rate HZ|recorded]
+//           [--config FILE]
 //
 // Runs the model on the frames of a labelled sequence -- camera (DeepLoc
 // layout) or, for a LiDAR model (BEV or points), scans (lidar_poses.txt + KITTI/PCD) --
 // and reports position and orientation errors (median, mean, p90, p99, max,
 // shares beyond 10 and 50), the same for the poses the validity gate lets out
 // as valid (runtime/pose/pose_gate.h, with the configuration's sanity.track,
-// the sequence's clock from --rate), availability, and how often the
+// the sequence's clock from --rate or its times.txt), availability, and how often the
 // published 95 % regions hold the errors; per-frame rows with --csv (plot
 // them with `python3 -m aprt_tools plot-eval`). With
 // --compare (e.g. the int8 model beside its fp32 source) the second model runs
@@ -15,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <vector>
 
@@ -98,7 +100,7 @@ int cmd_eval(int argc, char** argv) {
         "  --every N     take every N-th frame from there\n"
         "  --limit N     at most N frames\n"
         "  --rate HZ     the sequence's frame rate for the validity gate's clock\n"
-        "                (default 25, the demo drive's)\n"
+        "                (default 25, the demo drive's); recorded: its times.txt\n"
         "  --config FILE the validity gate's parameters (sanity.track, max_jump_m) from\n"
         "                a configuration (default: the built-in defaults)\n"
         "  --threads N   --isa NAME   as for aprt bench\n"
@@ -114,7 +116,11 @@ int cmd_eval(int argc, char** argv) {
   const long limit = args.integer("--limit", 0, 0, 100000000);
   const long start = args.integer("--start", 0, 0, 100000000);
   const long every = args.integer("--every", 1, 1, 100000);
-  const double rate = args.number("--rate", 25.0, 0.01, 10000.0);
+  // "recorded": the sequence's own times (times.txt), e.g. a real drive's
+  // time stamps or a synthetic drive's speed profile (aprt_tools drive-times).
+  const char* rate_text = args.value("--rate");
+  const bool recorded = rate_text && std::strcmp(rate_text, "recorded") == 0;
+  const double rate = recorded ? 25.0 : args.number("--rate", 25.0, 0.01, 10000.0);
   const char* config_path = args.value("--config");
   const long threads = args.integer("--threads", 1, 1, 16);
   const char* isa = args.value("--isa");
@@ -174,6 +180,18 @@ int cmd_eval(int argc, char** argv) {
                  inputs->size(), data);
     return 2;
   }
+  if (recorded) {
+    for (const size_t i : frames) {
+      if (inputs->time_s(i) < 0) {
+        std::fprintf(stderr,
+                     "aprt eval: --rate recorded: %s has no times.txt (\"name seconds\" per "
+                     "frame; LiDAR sequences have none): give the rate in Hz\n",
+                     data);
+        return 2;
+      }
+    }
+  }
+  const double t0 = recorded ? inputs->time_s(frames.front()) : 0.0;
   const size_t n = frames.size();
   std::vector<EvalSample> samples;
   size_t bad_frames = 0, flagged = 0;
@@ -193,7 +211,7 @@ int cmd_eval(int argc, char** argv) {
     const double pe = distance(p.position, f.position);
     const double oe = quat_angle_deg(p.orientation, f.orientation);
     EvalSample smp;
-    smp.t_s = double(i) / rate;
+    smp.t_s = recorded ? inputs->time_s(i) - t0 : double(i) / rate;
     smp.position_error_m = pe;
     smp.orientation_error_deg = oe;
     const uint32_t all_flags = gate.apply(p, smp.t_s, p.flags);

@@ -34,6 +34,9 @@ class CameraInputs final : public EvalInputs {
     return in;
   }
   size_t size() const override { return replay_->size(); }
+  double time_s(size_t i) const override {
+    return replay_->has_times() ? replay_->entry(i).time_s : -1.0;
+  }
   bool fill(size_t i, Engine& e, EvalFrame* f, const char** why) override {
     if (Status s = replay_->read(i, &frame_, i, 0); !s) {
       *why = keep_reason(s.error());

@@ -22,6 +22,9 @@ class EvalInputs {
   // Fills the engine's input for frame i; false with a message in `why`
   // when the frame cannot be read (the caller skips it).
   virtual bool fill(size_t i, Engine& engine, EvalFrame* frame, const char** why) = 0;
+  // Frame i's recorded time (times.txt, seconds), or -1 when the sequence has
+  // none (LiDAR sequences never do).
+  virtual double time_s(size_t) const { return -1.0; }
 
  protected:
   const char* keep_reason(const Error& e) {  // the message outlives the Error

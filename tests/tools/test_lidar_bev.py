@@ -54,13 +54,17 @@ class Histogram(unittest.TestCase):
 
 
 class Configurations(unittest.TestCase):
-    def test_the_grid_always_spans_32_m(self):
+    def test_the_grid_spans_32_m_unless_told(self):
         for name, size, grid in (("bev", None, 256), ("tiny-bev", None, 64), ("bev", 64, 64)):
             cfg = AprConfig.named(name, size)
             self.assertEqual(cfg.image_size, grid)
             self.assertEqual(cfg.in_channels, 2)
             self.assertAlmostEqual(cfg.bev["cell_m"] * grid, 32.0)
             self.assertEqual(AprConfig.from_json(cfg.to_json()).bev, cfg.bev)
+        cfg = AprConfig.named("bev", 64, bev_span_m=64.0)  # the shipped town_bev.aprt's square
+        self.assertEqual((cfg.bev["cell_m"], cfg.bev["x_min"], cfg.bev["y_min"]), (1.0, -32.0, -32.0))
+        with self.assertRaisesRegex(ValueError, "BEV span 1.0 m"):
+            AprConfig.named("bev", 64, bev_span_m=1.0)
 
     def test_converter_writes_modality_and_geometry(self):
         cfg = AprConfig.named("tiny-bev")
@@ -74,6 +78,38 @@ class Configurations(unittest.TestCase):
         self.assertLess(report.max_rel_error_output, 1e-4)
 
 
+def scans_only_sequence(d, n=3, seed=0):
+    """A LiDAR sequence without camera images (aprt_synth --lidar --no-images)."""
+    os.makedirs(os.path.join(d, "lidar"))
+    rng = np.random.default_rng(seed)
+    lines = []
+    for k in range(n):
+        pts = rng.uniform(-20, 20, (3000, 4)).astype(np.float32)
+        pts[:, 2] = rng.uniform(-2, 2, 3000)
+        pts.tofile(os.path.join(d, "lidar", f"{k}.bin"))
+        lines.append(f"lidar/{k}.bin {k} 0 1.9 1 0 0 0")
+    with open(os.path.join(d, "lidar_poses.txt"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+class Confidence(unittest.TestCase):
+    def test_calibrates_on_the_scans(self):
+        # The confidence is calibrated on the validation drive's scans as the
+        # model sees them (it used to read camera images whatever the model).
+        from aprt_tools.confidence import calibrate_file
+
+        cfg = AprConfig.named("tiny-bev")
+        cfg.uncertainty = True
+        torch.manual_seed(5)
+        blob, _ = convert(export_onnx(vary(AprTransformer(cfg), 5), 13),
+                          config=json.loads(cfg.to_json()))
+        with tempfile.TemporaryDirectory() as d:
+            scans_only_sequence(d, n=6)
+            out, report = calibrate_file(blob, d)
+        self.assertIn("on 6 frames", report)
+        self.assertEqual(len(read(out)[1]["uncertainty"]), 2)
+
+
 class Int8(unittest.TestCase):
     def test_bev_model_calibrates_on_a_lidar_sequence(self):
         cfg = AprConfig.named("tiny-bev")
@@ -81,16 +117,7 @@ class Int8(unittest.TestCase):
         blob, _ = convert(export_onnx(vary(AprTransformer(cfg), 4), 13),
                           config=json.loads(cfg.to_json()))
         with tempfile.TemporaryDirectory() as d:
-            os.makedirs(os.path.join(d, "lidar"))
-            rng = np.random.default_rng(0)
-            lines = []
-            for k in range(3):
-                pts = rng.uniform(-20, 20, (3000, 4)).astype(np.float32)
-                pts[:, 2] = rng.uniform(-2, 2, 3000)
-                pts.tofile(os.path.join(d, "lidar", f"{k}.bin"))
-                lines.append(f"lidar/{k}.bin {k} 0 1.9 1 0 0 0")
-            with open(os.path.join(d, "lidar_poses.txt"), "w") as f:
-                f.write("\n".join(lines) + "\n")
+            scans_only_sequence(d)
             q, report = quantize_model(blob, d, frames=8)
             self.assertEqual(report.frames, 3)
             self.assertGreater(len(report.ops), 0)

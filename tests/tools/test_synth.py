@@ -101,6 +101,27 @@ class Synth(unittest.TestCase):
         self.assertLessEqual(len(pts), 4 * 90)
         self.assertLessEqual(np.linalg.norm(pts[:, :3], axis=1).max(), 40.0 + 1e-3)
 
+    def test_scans_only_are_the_same_scans(self):
+        lidar = ("--split", "test", "--route-seed", "3", "--frames", "3", "--lidar", "--beams", "4",
+                 "--azimuths", "64")
+        synth(self.path("both"), *lidar)
+        synth(self.path("scans"), *lidar, "--no-images")
+        self.assertFalse(os.path.exists(self.path("scans/images")))
+        self.assertEqual(read(self.path("both/lidar_poses.txt")),
+                         read(self.path("scans/lidar_poses.txt")))
+        self.assertEqual(read(self.path("both/poses.txt")), read(self.path("scans/poses.txt")))
+        for k in range(3):
+            name = f"lidar/{k:06d}.bin"
+            with open(self.path("both/" + name), "rb") as a, open(self.path("scans/" + name),
+                                                                  "rb") as b:
+                self.assertEqual(a.read(), b.read())
+        meta = json.loads(read(self.path("scans/dataset.json")))
+        self.assertFalse(meta["images"])
+        self.assertIn("--no-images", meta["command"])
+        r = synth(self.path("none"), "--frames", "1", "--no-images", check=False)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--no-images without --lidar", r.stderr)
+
     def test_view_jitter_moves_every_frame_within_its_bounds(self):
         synth(self.path("plain"), "--split", "test", "--route-seed", "9", "--frames", "40")
         synth(self.path("jit"), "--split", "test", "--route-seed", "9", "--frames", "40",

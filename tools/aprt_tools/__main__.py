@@ -162,7 +162,7 @@ def cmd_train(a):
                            modality=a.modality, config=preset, inputs=a.inputs,
                            inputs_every=a.inputs_every, val=a.val, augment_from=a.augment_from,
                            init=a.init, workers=a.workers, uncertainty=a.uncertainty,
-                           ema=a.ema, resize=resize)
+                           ema=a.ema, resize=resize, bev_span_m=a.bev_span)
     except (OSError, ValueError) as e:
         print(f"train: {e}", file=sys.stderr)
         sys.exit(2)
@@ -203,7 +203,24 @@ def cmd_confidence(a):
 def cmd_config(a):
     from .model.apr_transformer import AprConfig
 
-    print(AprConfig.named(a.name, a.size).to_json())
+    try:
+        print(AprConfig.named(a.name, a.size, a.bev_span).to_json())
+    except ValueError as e:
+        print(f"config: {e}", file=sys.stderr)
+        sys.exit(2)
+
+
+def cmd_drive_times(a):
+    from .drive_times import write_drive_times
+
+    try:
+        path, t = write_drive_times(a.folder, a.out, max_speed=a.max_speed,
+                                    lateral_accel=a.lateral_accel, accel=a.accel)
+    except (OSError, ValueError) as e:
+        print(f"drive-times: {a.folder}: {e}", file=sys.stderr)
+        sys.exit(2)
+    print(f"drive-times: {path}: {len(t)} frames over {t[-1]:.1f} s "
+          f"(mean {len(t) / max(t[-1], 1e-9):.1f} frames/s)")
 
 
 def cmd_plot_eval(a):
@@ -349,6 +366,9 @@ def main(argv=None):
                    help="the --every given to `aprt inputs` (frames of --data used)")
     t.add_argument("--config-json", help="a whole configuration (from `aprt_tools config NAME`, "
                                           "edited) instead of the --modality preset")
+    t.add_argument("--bev-span", type=float, default=32.0,
+                   help="bev: the square the grid covers, metres, centred on the sensor (default "
+                        "32, TransFuser's; cells of span/size)")
     t.add_argument("--modality", default="image", choices=("image", "bev", "points"),
                    help="bev: LiDAR scans (lidar_poses.txt) as BEV histograms, grid --size; "
                         "points: the same scans through PointNet++, --size points")
@@ -358,7 +378,20 @@ def main(argv=None):
                                        "train --config-json or export --config-json)")
     cf.add_argument("name", choices=CONFIGS)
     cf.add_argument("--size", type=int, help="image side / BEV grid / points sampled")
+    cf.add_argument("--bev-span", type=float, default=32.0,
+                    help="BEV models: the square the grid covers, metres (default 32)")
     cf.set_defaults(fn=cmd_config)
+
+    dt = sub.add_parser("drive-times", help="times.txt for a sequence without one: a speed profile "
+                                            "a vehicle could drive along its poses")
+    dt.add_argument("folder", help="a DeepLoc-layout sequence (poses.txt)")
+    dt.add_argument("--max-speed", type=float, default=13.9, help="m/s on straights (default 13.9)")
+    dt.add_argument("--lateral-accel", type=float, default=3.0,
+                    help="m/s^2 in curves: the speed there is sqrt(a / curvature) (default 3)")
+    dt.add_argument("--accel", type=float, default=2.0,
+                    help="m/s^2 of acceleration and braking between them (default 2)")
+    dt.add_argument("--out", help="where to write (default FOLDER/times.txt)")
+    dt.set_defaults(fn=cmd_drive_times)
 
     pe = sub.add_parser("plot-eval", help="trajectory and error plot from `aprt eval --csv` files")
     pe.add_argument("csv", nargs="+", help="one or more CSV files (side by side)")

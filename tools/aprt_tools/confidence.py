@@ -71,10 +71,13 @@ def coverage(raw, pos_true, quat_true, pose_min, pose_max, k_pos, k_rot):
 
 @torch.no_grad()
 def outputs_on(model, cfg, folder: str, batch: int = 64):
-    """The network's raw outputs on a labelled camera drive, with its truth."""
+    """The network's raw outputs on a labelled drive of the model's modality
+    (camera frames, or LiDAR scans as the model's BEV histogram or points),
+    with its truth."""
     from .train_data import _load, network_input
 
-    imgs, pos, quat = _load([folder], "image", cfg.image_size, cfg, print, None, 1)
+    modality = "points" if cfg.points else "bev" if cfg.bev else "image"
+    imgs, pos, quat = _load([folder], modality, cfg.image_size, cfg, print, None, 1)
     model.eval()
     out = []
     for i in range(0, len(imgs), batch):

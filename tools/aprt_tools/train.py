@@ -50,7 +50,8 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
           warmup_steps: int = 200, modality: str = "image", config: AprConfig | None = None,
           inputs: str | None = None, inputs_every: int = 1, val: str | None = None,
           augment_from: float = 0.3, init: str | None = None, workers: int = 1,
-          uncertainty: bool = False, ema: float = 0.0, resize: int | None = None, log=print):
+          uncertainty: bool = False, ema: float = 0.0, resize: int | None = None,
+          bev_span_m: float = 32.0, log=print):
     """data: one sequence folder or a list of them (several drives, e.g. under
     different light), trained on together. val: a separate drive whose errors
     are reported each epoch and recorded as the model's `val_error`; without
@@ -75,8 +76,9 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     between them); 2 with threads 2 is the fastest on two cores.
 
     modality "image": DATA's poses.txt + images at size x size; "bev": its
-    lidar_poses.txt + scans as size x size BEV histograms over 32 m (the 'bev'
-    configuration's geometry at that grid); "points": the same scans as
+    lidar_poses.txt + scans as size x size BEV histograms over a square of
+    bev_span_m (default 32: the 'bev' configuration's geometry at that grid;
+    cells of bev_span_m / size); "points": the same scans as
     `size` farthest-point samples through PointNet++ (the 'points'
     configuration; size >= 1024). LiDAR without augmentation.
 
@@ -111,7 +113,8 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
         size = cfg.image_size
         hidden, layers = cfg.hidden_dim, cfg.enc_layers
     else:
-        cfg = AprConfig.named({"bev": "bev", "points": "points"}.get(modality, "full"), size)
+        cfg = AprConfig.named({"bev": "bev", "points": "points"}.get(modality, "full"), size,
+                              bev_span_m)
     folders = [data] if isinstance(data, str) else list(data)
     if not folders:
         raise ValueError("no training sequence given")

@@ -158,6 +158,7 @@ int run(int argc, char** argv) {
   if (o.frames > 0 && size_t(o.frames) < path.size()) path.resize(size_t(o.frames));
   for (const std::string& dir : {o.out, o.out + "/images", o.out + "/lidar"}) {
     if (!o.lidar && dir == o.out + "/lidar") continue;
+    if (!o.images && dir == o.out + "/images") continue;
     if (!make_dirs(dir)) {
       std::fprintf(stderr, "aprt_synth: cannot create %s: %s\n", dir.c_str(), std::strerror(errno));
       return 1;
@@ -180,9 +181,11 @@ int run(int argc, char** argv) {
       const Vec3 base{vp.x, vp.y, 0.0};
       const Vec3 eye = base + rotate(qv, {o.cam_x, o.cam_y, o.cam_z + j.height});
       const Quat qc = yaw_pitch(vp.yaw, pitch + j.pitch);
-      render_image(scene, o, L, eye, qc, &rgb);
       std::snprintf(name, sizeof name, "images/%06zu.png", k);
-      if (!write_png(o.out + "/" + name, o.width, o.height, rgb)) failed[size_t(t)]++;
+      if (o.images) {
+        render_image(scene, o, L, eye, qc, &rgb);
+        if (!write_png(o.out + "/" + name, o.width, o.height, rgb)) failed[size_t(t)]++;
+      }
       char line[256];
       std::snprintf(line, sizeof line, "%s %.4f %.4f %.4f %.6f %.6f %.6f %.6f", name, eye.x, eye.y,
                     eye.z, qc.w, qc.x, qc.y, qc.z);
@@ -246,23 +249,23 @@ int run(int argc, char** argv) {
       " \"view_jitter\": {\"lateral_m\": %.4f, \"height_m\": %.4f, \"pitch_deg\": %.4f, "
       "\"yaw_deg\": %.4f},\n"
       " \"town_extent_m\": %.1f, \"street_spacing_m\": %.1f, \"road_width_m\": %.1f,\n"
-      " \"lane_jitter_m\": %.4f, \"lidar\": %s, \"beams\": %d,\n"
+      " \"lane_jitter_m\": %.4f, \"lidar\": %s, \"images\": %s, \"beams\": %d,\n"
       " \"azimuths\": %d, \"lidar_range_m\": %.4f, \"lidar_noise_m\": %.4f,\n"
       " \"command\": \"aprt_synth --split %s --lighting %s --town-seed %u --route-seed %u "
       "--frames %d%s%s --spacing %g --lane-jitter %g --view-jitter %g,%g,%g,%g --width %d "
-      "--height %d --hfov %g --camera-mount %g,%g,%g,%g%s --beams %d --azimuths %d "
+      "--height %d --hfov %g --camera-mount %g,%g,%g,%g%s%s --beams %d --azimuths %d "
       "--lidar-range %g --lidar-noise %g --lidar-mount %g,%g,%g\"}\n",
       o.split.c_str(), o.lighting.c_str(), o.town_seed, o.route_seed, path.size(), o.frames, maxlen,
       o.spacing, o.width, o.height, f, f, o.width / 2.0 - 0.5, o.height / 2.0 - 0.5, o.hfov_deg,
       o.cam_x, o.cam_y, o.cam_z, o.cam_pitch_deg, o.lidar_x, o.lidar_y, o.lidar_z, o.jitter_lateral,
       o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg, town.extent, town.block,
-      2 * town.road_half, ro.lane_jitter, o.lidar ? "true" : "false", o.beams, o.azimuths,
-      o.lidar_range, o.lidar_noise, o.split.c_str(), o.lighting.c_str(), o.town_seed, o.route_seed,
-      o.frames, o.max_length >= 1e9 ? "" : " --max-length ", o.max_length >= 1e9 ? "" : maxlen,
-      o.spacing, ro.lane_jitter, o.jitter_lateral, o.jitter_height, o.jitter_pitch_deg,
-      o.jitter_yaw_deg, o.width, o.height, o.hfov_deg, o.cam_x, o.cam_y, o.cam_z, o.cam_pitch_deg,
-      o.lidar ? " --lidar" : "", o.beams, o.azimuths, o.lidar_range, o.lidar_noise, o.lidar_x,
-      o.lidar_y, o.lidar_z);
+      2 * town.road_half, ro.lane_jitter, o.lidar ? "true" : "false", o.images ? "true" : "false",
+      o.beams, o.azimuths, o.lidar_range, o.lidar_noise, o.split.c_str(), o.lighting.c_str(),
+      o.town_seed, o.route_seed, o.frames, o.max_length >= 1e9 ? "" : " --max-length ",
+      o.max_length >= 1e9 ? "" : maxlen, o.spacing, ro.lane_jitter, o.jitter_lateral,
+      o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg, o.width, o.height, o.hfov_deg, o.cam_x,
+      o.cam_y, o.cam_z, o.cam_pitch_deg, o.lidar ? " --lidar" : "", o.images ? "" : " --no-images",
+      o.beams, o.azimuths, o.lidar_range, o.lidar_noise, o.lidar_x, o.lidar_y, o.lidar_z);
   std::fclose(j);
   std::printf("aprt_synth: %zu frames (%s, %s) -> %s\n", path.size(), o.split.c_str(),
               o.lighting.c_str(), o.out.c_str());

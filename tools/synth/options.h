@@ -22,6 +22,7 @@ struct Options {
   double max_length = 1e9;
   double lane_jitter = -1;  // < 0: the split's default
   bool lidar = false;
+  bool images = true;  // false (--no-images): LiDAR scans only, 5x faster to render
   int beams = 32;
   int azimuths = 1024;
   double lidar_range = 80.0;

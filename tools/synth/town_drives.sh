@@ -20,17 +20,10 @@
 # (the confidence is calibrated on val_haze, the validity gate chosen on the nine).
 # Deterministic; ~15 minutes on two cores, ~900 MB.
 #   tools/synth/town_drives.sh OUT [path/to/aprt_synth] [--only NAME]
-set -euo pipefail
-out="${1:?usage: town_drives.sh OUT [aprt_synth] [--only NAME]}"
-synth="${2:-$(dirname "$0")/../../build/release/bin/aprt_synth}"
-only="${4:-}"
-[ -x "$synth" ] || { echo "town_drives: no aprt_synth at $synth (build the release preset)" >&2; exit 2; }
-render() {
-  local name="$1"; shift
-  if [ -n "$only" ] && [ "$only" != "$name" ]; then return; fi
-  if [ -f "$out/$name/dataset.json" ]; then echo "town_drives: $name exists"; return; fi
-  "$synth" --quiet --out "$out/$name" "$@"
-}
+script=town_drives
+extra=""
+# shellcheck source=tools/synth/render_drives.sh
+source "$(dirname "$0")/render_drives.sh"
 jitter=1.5,0.3,3,10
 render train_day      --split train --route-seed 1 --lighting day --lane-jitter 0.5
 render train_overcast --split train --route-seed 2 --lighting overcast --lane-jitter 0.8

@@ -61,7 +61,8 @@ class AprConfig:
     extra: dict = field(default_factory=dict)
 
     @staticmethod
-    def named(name: str, image_size: int | None = None) -> "AprConfig":
+    def named(name: str, image_size: int | None = None,
+              bev_span_m: float = 32.0) -> "AprConfig":
         """Preset configurations: 'full' (upstream DeepLoc) and 'tiny' (tests);
         'bev' and 'tiny-bev' are the same networks on the LiDAR BEV histogram
         (DESIGN.md 4.2: 2 channels; 256 x 256 cells of 0.125 m, TransFuser's
@@ -84,11 +85,14 @@ class AprConfig:
                              "tiny-points)")
         if image_size is not None:
             cfg.image_size = image_size
-        if bev:  # the grid is the input side; it always spans 32 m
+        if bev:  # the grid is the input side over a square of bev_span_m (32: TransFuser's)
+            if not 4.0 <= bev_span_m <= 400.0:
+                raise ValueError(f"BEV span {bev_span_m} m: must be within 4..400 m")
             cfg.image_size = image_size or (256 if base == "full" else 64)
             cfg.in_channels = 2
             cfg.mean, cfg.std = (0.0, 0.0), (1.0, 1.0)  # histogram values are in [0, 1]
-            cfg.bev = dict(cell_m=32.0 / cfg.image_size, x_min=-16.0, y_min=-16.0,
+            half = bev_span_m / 2.0
+            cfg.bev = dict(cell_m=bev_span_m / cfg.image_size, x_min=-half, y_min=-half,
                            height_threshold_m=-1.4, clip_count=5.0)
         if pts:  # the input is N points x 6 features; image_size is N
             cfg.points = points_config(tiny=base == "tiny")

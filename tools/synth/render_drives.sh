@@ -1,0 +1,17 @@
+# Sourced by town_drives.sh and town_lidar_drives.sh: their arguments
+# (OUT [path/to/aprt_synth] [--only NAME]) and `render NAME ARGS...`, which
+# makes OUT/NAME with aprt_synth unless it is there already (or --only names
+# another drive). $script names the caller in messages; $extra holds options
+# every drive of the caller takes.
+set -euo pipefail
+out="${1:?usage: $script OUT [aprt_synth] [--only NAME]}"
+synth="${2:-$(dirname "${BASH_SOURCE[0]}")/../../build/release/bin/aprt_synth}"
+only="${4:-}"
+[ -x "$synth" ] || { echo "$script: no aprt_synth at $synth (build the release preset)" >&2; exit 2; }
+render() {
+  local name="$1"; shift
+  if [ -n "$only" ] && [ "$only" != "$name" ]; then return; fi
+  if [ -f "$out/$name/dataset.json" ]; then echo "$script: $name exists"; return; fi
+  # shellcheck disable=SC2086 # $extra is a list of options
+  "$synth" --quiet $extra --out "$out/$name" "$@"
+}
