@@ -97,6 +97,9 @@ void* capture_thread(void* channel) {
   }
   while (!shared.stop.load(std::memory_order_acquire)) {
     c.beat.store(monotonic_ns(), std::memory_order_release);
+    // The back buffer is reused: a stamp left from the frame it held before
+    // must not pass for this frame's (only sources with their own clock set one).
+    c.slot->back().info.source_stamp_ns = 0;
     switch (c.source->next(&c.slot->back(), kLoopWaitNs)) {
       case SourceResult::kFrame: {
         if (!c.source->driver_timestamps()) {

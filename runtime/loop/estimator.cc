@@ -129,7 +129,7 @@ uint32_t Estimator::check(const PoseRecord& rec, uint32_t flags) noexcept {
   // A frame that came late or stale says nothing against the track's motion;
   // everything else the pose itself or the fusion flagged is not used by it.
   const uint32_t own = flags & ~(kPoseStaleFrame | kPoseDeadlineMissed);
-  return flags | gate_.check(rec.pose, double(rec.capture_ns) * 1e-9, own);
+  return flags | gate_.check(rec.pose, clock_.seconds(rec.capture_ns, rec.source_stamp_ns), own);
 }
 
 }  // namespace aprt

@@ -69,6 +69,7 @@ class Estimator {
   int64_t deadline_ns_;
   FusionParams fusion_;
   PoseGate gate_;
+  GateClock clock_;  // the frames' own stamps where they have them
   ScanNote scan_;
   uint64_t sparse_scans_ = 0, no_quorum_ = 0, deadline_misses_ = 0;
 };

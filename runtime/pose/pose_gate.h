@@ -41,6 +41,32 @@ struct PoseGateParams {
   int lost_after = 25;                 // rejections in a row that end it
 };
 
+// The gate's clock in the loop. The motion gate compares poses against the
+// time between their frames. A frame's own stamp (a PointCloud2 header, a
+// recorded drive's stamp) is that time as the sensor saw it; arrival
+// (capture_ns, CLOCK_MONOTONIC) is only as good as the machine's scheduling.
+// So a recording replayed runs the gate on the clock it was recorded with and
+// gives the same valid flags. A frame without a stamp in a run that had
+// stamps is put on the stamps' clock by the last known offset, so the two
+// clocks never mix. Seconds since the first frame, from integer nanoseconds:
+// a wall-clock stamp (~1.8e9 s) held in a double keeps only ~0.2 us. @rt.
+class GateClock {
+ public:
+  double seconds(int64_t capture_ns, int64_t stamp_ns) noexcept {
+    if (stamp_ns != 0) stamp_minus_capture_ns_ = stamp_ns - capture_ns;
+    const int64_t t = stamp_ns != 0 ? stamp_ns : capture_ns + stamp_minus_capture_ns_;
+    if (!started_) {
+      started_ = true;
+      origin_ns_ = t;
+    }
+    return double(t - origin_ns_) * 1e-9;
+  }
+
+ private:
+  int64_t origin_ns_ = 0, stamp_minus_capture_ns_ = 0;
+  bool started_ = false;
+};
+
 class PoseGate {
  public:
   explicit PoseGate(const PoseGateParams& p = {}) : p_(p) {}

@@ -122,6 +122,26 @@ TEST(PoseGate, FlaggedEstimatesAreNotUsedAndDisabledGateOnlyChecksJumps) {
   EXPECT_EQ(d.check(on_road(1, 0, 100), kDt, 0), kPoseJump);
 }
 
+TEST(GateClock, FramesOwnStampsOverArrival) {
+  // A recording replayed as fast as the machine goes: frames arrive 1 ms
+  // apart but were stamped 40 ms apart; the gate sees the 40 ms.
+  GateClock c;
+  const int64_t wall = 1796395395'551520857;  // a wall-clock stamp, ns
+  EXPECT_EQ(c.seconds(5'000'000, wall), 0.0);
+  EXPECT_DOUBLE_EQ(c.seconds(6'000'000, wall + 40'000'000), 0.040);
+  EXPECT_DOUBLE_EQ(c.seconds(7'000'000, wall + 80'000'000), 0.080);
+  // A frame without a stamp stays on the stamps' clock (last offset).
+  EXPECT_DOUBLE_EQ(c.seconds(8'000'000, 0), 0.081);
+  // Exact to the nanosecond however large the stamps are.
+  EXPECT_EQ(c.seconds(9'000'000, wall + 1), 1e-9);
+}
+
+TEST(GateClock, ArrivalWhenNoFrameHasAStamp) {
+  GateClock c;
+  EXPECT_EQ(c.seconds(2'000'000'000, 0), 0.0);
+  EXPECT_DOUBLE_EQ(c.seconds(2'100'000'000, 0), 0.1);
+}
+
 TEST(PoseGate, AllocatesNothing) {
   PoseGate g(params());
   const AllocationScope scope;

@@ -45,6 +45,12 @@ const a = read(fa), b = read(fb);
 const frames = (x) => x["sensor_msgs/msg/Image"] || x["sensor_msgs/msg/PointCloud2"] || [];
 const fa_ = frames(a), fb_ = frames(b);
 if (fa_.length === 0 || fa_.length !== fb_.length) fail(`frames: ${fa_.length} vs ${fb_.length}`);
+// Each frame of a drive has its own stamp, later than the one before (a
+// frame buffer reused by the camera must not hand on its old stamp).
+const ns = (h) => BigInt(h.stamp.sec) * 1000000000n + BigInt(h.stamp.nanosec);
+fa_.forEach((x, i) => {
+  if (i > 0 && ns(x.header) <= ns(fa_[i - 1].header)) fail(`frame ${i}: stamp ${stamp(x.header)} not after frame ${i - 1}'s ${stamp(fa_[i - 1].header)}`);
+});
 fa_.forEach((x, i) => {
   const y = fb_[i];
   if (stamp(x.header) !== stamp(y.header)) fail(`frame ${i}: stamp ${stamp(x.header)} vs ${stamp(y.header)}`);
