@@ -46,9 +46,11 @@ struct PoseGateParams {
 // recorded drive's stamp) is that time as the sensor saw it; arrival
 // (capture_ns, CLOCK_MONOTONIC) is only as good as the machine's scheduling.
 // So a recording replayed runs the gate on the clock it was recorded with and
-// gives the same valid flags. A frame without a stamp in a run that had
-// stamps is put on the stamps' clock by the last known offset, so the two
-// clocks never mix. Seconds since the first frame, from integer nanoseconds:
+// gives the same valid flags. A frame without a stamp after frames with one
+// is put on the stamps' clock by the last known offset. (Stamps that begin
+// only after unstamped frames move the clock once, by the offset between the
+// two clocks: the gate then drops its track and confirms a new one.)
+// Seconds since the first frame, from integer nanoseconds:
 // a wall-clock stamp (~1.8e9 s) held in a double keeps only ~0.2 us. @rt.
 class GateClock {
  public:
