@@ -46,16 +46,20 @@ struct PoseGateParams {
 // recorded drive's stamp) is that time as the sensor saw it; arrival
 // (capture_ns, CLOCK_MONOTONIC) is only as good as the machine's scheduling.
 // So a recording replayed runs the gate on the clock it was recorded with and
-// gives the same valid flags. A frame without a stamp after frames with one
-// is put on the stamps' clock by the last known offset. (Stamps that begin
-// only after unstamped frames move the clock once, by the offset between the
-// two clocks: the gate then drops its track and confirms a new one.)
+// gives the same valid flags. A frame without a stamp is put on the stamps'
+// clock by the last known offset between the two, so the clocks never mix
+// (stamps that begin only after unstamped frames carry the origin over).
 // Seconds since the first frame, from integer nanoseconds:
 // a wall-clock stamp (~1.8e9 s) held in a double keeps only ~0.2 us. @rt.
 class GateClock {
  public:
   double seconds(int64_t capture_ns, int64_t stamp_ns) noexcept {
-    if (stamp_ns != 0) stamp_minus_capture_ns_ = stamp_ns - capture_ns;
+    if (stamp_ns != 0) {
+      const int64_t offset = stamp_ns - capture_ns;
+      if (started_ && !stamped_) origin_ns_ += offset;  // the first stamp: onto its clock
+      stamp_minus_capture_ns_ = offset;
+      stamped_ = true;
+    }
     const int64_t t = stamp_ns != 0 ? stamp_ns : capture_ns + stamp_minus_capture_ns_;
     if (!started_) {
       started_ = true;
@@ -66,15 +70,15 @@ class GateClock {
 
  private:
   int64_t origin_ns_ = 0, stamp_minus_capture_ns_ = 0;
-  bool started_ = false;
+  bool started_ = false, stamped_ = false;
 };
 
 class PoseGate {
  public:
   explicit PoseGate(const PoseGateParams& p = {}) : p_(p) {}
 
-  // The gate's flags for an estimate at time t_s (seconds, monotonic) whose
-  // own flags are `flags` (an estimate already flagged is not used). @rt.
+  // The gate's flags for an estimate at time t_s (seconds, on one clock: GateClock in the loop, the
+  // drive's in eval) whose own flags are `flags` (an estimate already flagged is not used). @rt.
   uint32_t check(const PoseEstimate& e, double t_s, uint32_t flags) noexcept;
   // flags | check(): every flag the pose goes out with.
   uint32_t apply(const PoseEstimate& e, double t_s, uint32_t flags) noexcept {

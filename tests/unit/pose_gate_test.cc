@@ -142,6 +142,16 @@ TEST(GateClock, ArrivalWhenNoFrameHasAStamp) {
   EXPECT_DOUBLE_EQ(c.seconds(2'100'000'000, 0), 0.1);
 }
 
+TEST(GateClock, StampsBeginningLateContinueTheClock) {
+  // Two frames without a stamp, then stamps on another clock: no jump.
+  GateClock c;
+  const int64_t wall = 1796395395'000000000;
+  EXPECT_EQ(c.seconds(1'000'000'000, 0), 0.0);
+  EXPECT_DOUBLE_EQ(c.seconds(1'040'000'000, 0), 0.040);
+  EXPECT_DOUBLE_EQ(c.seconds(1'080'000'000, wall), 0.080);
+  EXPECT_DOUBLE_EQ(c.seconds(1'100'000'000, wall + 40'000'000), 0.120);
+}
+
 TEST(PoseGate, AllocatesNothing) {
   PoseGate g(params());
   const AllocationScope scope;
