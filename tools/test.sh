@@ -54,7 +54,7 @@ case "${1:-}" in
     ctest --preset asan -R 'run\.(replay|lidar)\.generate' --timeout 600 >/dev/null
     TSAN_OPTIONS="halt_on_error=1 suppressions=$PWD/tests/tsan.supp" \
       APRT_RUN_FIXTURES="$PWD/build/asan" build/tsan/bin/run_loop_tests \
-      --gtest_filter='RunLoop.*:MultiCamera.*:LidarLoop.*'
+      --gtest_filter='RunLoop.*:MultiCamera.*:LidarLoop.*:Companion.*'
     # (FaultInjection.* is timing-driven by design; it runs in the default step.)
     ;;
   --aarch64)

@@ -36,6 +36,11 @@ std::string resolve(const std::string& path, const std::string& base) {
   return base + "/" + path;
 }
 
+std::string directory_of(const std::string& file) {
+  const size_t slash = file.rfind('/');
+  return slash == std::string::npos ? std::string(".") : file.substr(0, slash);
+}
+
 // --check: what an integrator runs after editing /etc/aprt/aprt.yaml, before
 // restarting the service. The configuration has been read and checked; the
 // model is loaded for real (checksums, op set, memory plan) with the
@@ -149,13 +154,34 @@ int cmd_run(int argc, char** argv) {
     return 2;
   }
   Config cfg = loaded.value();
-  const std::string base = config_path ? [&] {
-    const std::string p(config_path);
-    const size_t slash = p.rfind('/');
-    return slash == std::string::npos ? std::string(".") : p.substr(0, slash);
-  }() : data_dir();
+  const std::string base = config_path ? directory_of(config_path) : data_dir();
   cfg.model = resolve(model ? model : cfg.model, model ? "." : base);
   cfg.model_signing.public_key = resolve(cfg.model_signing.public_key, base);
+  // A second sensor (fusion.companion): its own configuration, its paths
+  // relative to itself.
+  Config companion;
+  const bool fused = !cfg.fusion.companion.empty();
+  if (fused) {
+    const std::string cpath = resolve(cfg.fusion.companion, base);
+    auto c = load_config(cpath);
+    if (!c) {
+      std::fprintf(stderr, "aprt run: %s: fusion.companion: %s\n", path.c_str(),
+                   c.error().message());
+      return 2;
+    }
+    companion = c.value();
+    if (!companion.fusion.companion.empty() || !companion.cameras.empty()) {
+      std::fprintf(stderr,
+                   "aprt run: %s: fusion.companion %s: the companion is one sensor: it may "
+                   "configure neither `cameras` nor a companion of its own\n",
+                   path.c_str(), cpath.c_str());
+      return 2;
+    }
+    const std::string cbase = directory_of(cpath);
+    companion.model = resolve(companion.model, cbase);
+    companion.model_signing.public_key = resolve(companion.model_signing.public_key, cbase);
+    companion.source.replay.path = resolve(companion.source.replay.path, cbase);
+  }
   if (replay && !cfg.cameras.empty()) {
     std::fprintf(stderr,
                  "aprt run: --replay replaces the single camera; %s configures %zu cameras\n",
@@ -191,10 +217,21 @@ int cmd_run(int argc, char** argv) {
   };
   adjust(cfg.source);
   for (Config::Camera& cam : cfg.cameras) adjust(cam.source);
+  if (fused) {
+    // The companion's replay follows the command line too (a drive folder
+    // holds both sensors' sequences), its path relative to its own file.
+    const std::string kept = companion.source.replay.path;
+    adjust(companion.source);
+    if (!replay) companion.source.replay.path = kept;
+  }
   if (threads > 0) cfg.engine.threads = int(threads);
   if (quiet) cfg.output.console = false;
-  if (check) return check_only(path, cfg);
-  auto runtime = Runtime::create(cfg);
+  if (check) {
+    const int code = check_only(path, cfg);
+    if (code != 0 || !fused) return code;
+    return check_only(companion.origin, companion);
+  }
+  auto runtime = Runtime::create(cfg, fused ? &companion : nullptr);
   if (!runtime) {
     std::fprintf(stderr, "aprt run: %s\n", runtime.error().message());
     return 2;
@@ -214,6 +251,10 @@ int cmd_run(int argc, char** argv) {
     const Config::Source& src = cfg.cameras[i].source;
     std::printf("aprt run: fused with camera %s on %s\n", cfg.cameras[i].name.c_str(),
                 source_text(src).c_str());
+  }
+  if (fused) {
+    std::printf("aprt run: fused with %s on %s (fusion.companion %s)\n", companion.model.c_str(),
+                source_text(companion.source).c_str(), companion.origin.c_str());
   }
   if (save) {
     char* colon = nullptr;

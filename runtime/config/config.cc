@@ -263,9 +263,10 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(read_source(r, root->get("source"), "source", &c.source));
     APRT_TRY(read_cameras(r, root, &c));
     const Node* fu = root->get("fusion");
-    APRT_TRY(r.map(fu, "fusion",
-                   {"max_position_spread_m", "max_orientation_spread_deg", "min_agreeing",
-                    "max_frame_skew_ms"}));
+    APRT_TRY(r.map(
+        fu, "fusion",
+        {"max_position_spread_m", "max_orientation_spread_deg", "min_agreeing", "max_frame_skew_ms",
+         "companion", "companion_max_age_ms", "min_lead_s", "cross_check"}));
     APRT_TRY(
         r.num(fu, "fusion", "max_position_spread_m", 0.01, 1e4, &c.fusion.max_position_spread_m));
     APRT_TRY(r.num(fu, "fusion", "max_orientation_spread_deg", 0.01, 180,
@@ -273,6 +274,10 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(
         r.integer(fu, "fusion", "min_agreeing", 1, Config::kMaxCameras, &c.fusion.min_agreeing));
     APRT_TRY(r.num(fu, "fusion", "max_frame_skew_ms", 0, 1000, &c.fusion.max_frame_skew_ms));
+    APRT_TRY(r.str(fu, "fusion", "companion", &c.fusion.companion));
+    APRT_TRY(r.num(fu, "fusion", "companion_max_age_ms", 1, 10000, &c.fusion.companion_max_age_ms));
+    APRT_TRY(r.num(fu, "fusion", "min_lead_s", 0, 3600, &c.fusion.min_lead_s));
+    APRT_TRY(r.boolean(fu, "fusion", "cross_check", &c.fusion.cross_check));
 
     const Node* out = root->get("output");
     APRT_TRY(r.map(out, "output",

@@ -118,6 +118,13 @@ struct Config {
     double max_orientation_spread_deg = 10.0;  // ... or this far in orientation
     int min_agreeing = 1;             // at least this many agreeing cameras (and always a majority)
     double max_frame_skew_ms = 20.0;  // wait this long after the trigger for the others' frames
+    // A second sensor with its own model (runtime/loop/companion.h): the path
+    // of its own configuration file (its model, source, extrinsics and
+    // validity gate; relative to this file). Empty: none.
+    std::string companion;
+    double companion_max_age_ms = 150.0;  // an older companion estimate is not fused
+    double min_lead_s = 1.0;   // two valid sensors that disagree: the longer valid by this much
+    bool cross_check = false;  // one valid sensor checked against the other's estimate too
   } fusion;
 
   struct Output {

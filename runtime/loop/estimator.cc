@@ -129,7 +129,8 @@ uint32_t Estimator::check(const PoseRecord& rec, uint32_t flags) noexcept {
   // A frame that came late or stale says nothing against the track's motion;
   // everything else the pose itself or the fusion flagged is not used by it.
   const uint32_t own = flags & ~(kPoseStaleFrame | kPoseDeadlineMissed);
-  return flags | gate_.check(rec.pose, clock_.seconds(rec.capture_ns, rec.source_stamp_ns), own);
+  last_gate_s_ = clock_.seconds(rec.capture_ns, rec.source_stamp_ns);
+  return flags | gate_.check(rec.pose, last_gate_s_, own);
 }
 
 }  // namespace aprt

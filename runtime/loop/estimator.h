@@ -55,6 +55,9 @@ class Estimator {
   uint32_t check(const PoseRecord& rec, uint32_t flags) noexcept;
 
   const ScanNote& last_scan() const { return scan_; }
+  // The validity gate, and the time (its clock) of the last estimate it checked.
+  const PoseGate& gate() const { return gate_; }
+  double last_gate_s() const { return last_gate_s_; }
   uint64_t sparse_scans() const { return sparse_scans_; }
   uint64_t no_quorum() const { return no_quorum_; }
   uint64_t deadline_misses() const { return deadline_misses_; }
@@ -70,6 +73,7 @@ class Estimator {
   FusionParams fusion_;
   PoseGate gate_;
   GateClock clock_;  // the frames' own stamps where they have them
+  double last_gate_s_ = 0;
   ScanNote scan_;
   uint64_t sparse_scans_ = 0, no_quorum_ = 0, deadline_misses_ = 0;
 };

@@ -8,6 +8,7 @@
 #include "drivers/output/dds/dds_publisher.h"
 #include "runtime/loop/recorder.h"
 #include "runtime/pose/pose_flags.h"
+#include "runtime/pose/sensor_fusion.h"
 
 namespace aprt {
 namespace {
@@ -219,8 +220,9 @@ void PoseOutputs::publish_status(const StatusSnapshot& s, int64_t realtime_ns) n
   static const char* const kKeys[kCount] = {
       "state",          "reason",       "poses", "flagged",       "last_flags",  "deadline_misses",
       "frames_skipped", "inference_ms", "can",   "can_estimates", "can_dropped", "can_problem"};
-  // Multi-camera runs add "fusion" and one "camera NAME" per camera; LiDAR runs "lidar".
-  constexpr int kMax = kCount + 2 + 8;
+  // Multi-camera runs add "fusion" and one "camera NAME" per camera; LiDAR runs
+  // "lidar"; runs with a second sensor "companion".
+  constexpr int kMax = kCount + 4 + 8;
   const char* keys[kMax];
   char v[kMax][48];
   for (int i = 0; i < kCount; ++i) keys[i] = kKeys[i];
@@ -269,6 +271,19 @@ void PoseOutputs::publish_status(const StatusSnapshot& s, int64_t realtime_ns) n
                       (f->inlier_mask >> i) & 1 ? "inlier" : "outlier", double(f->deviation_m[i]),
                       double(f->deviation_deg[i]));
       }
+    }
+  }
+  if (s.companion && s.companion->configured) {
+    const CompanionNote& cn = *s.companion;
+    keys[count] = "companion";
+    if (!cn.present) {
+      std::snprintf(v[count++], sizeof v[0], "no recent estimate");
+    } else {
+      std::snprintf(v[count++], sizeof v[0], "%s, %.1f m %.1f deg apart, %.0f ms old",
+                    fused_from_name(FusedFrom(cn.from)), double(cn.distance_m),
+                    double(cn.yaw_diff_deg), double(cn.age_ms));
+      keys[count] = "companion_flags";
+      pose_flag_names(cn.flags, v[count++], int(sizeof v[0]));
     }
   }
   const char* values[kMax];

@@ -48,7 +48,8 @@ struct StatusSnapshot {
   uint64_t poses = 0, flagged = 0, deadline_misses = 0, frames_skipped = 0;
   uint32_t last_flags = 0;
   double last_inference_ms = 0;
-  const FusionSummary* fusion = nullptr;  // the last cycle's (multi-camera runs)
+  const FusionSummary* fusion = nullptr;     // the last cycle's (multi-camera runs)
+  const CompanionNote* companion = nullptr;  // the last cycle's (fusion.companion runs)
   // LiDAR runs: the last scan's points (after a points model's crop), what the
   // point gate dropped and clipped in it, and the sparse scans so far.
   bool lidar = false;

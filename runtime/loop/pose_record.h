@@ -20,6 +20,18 @@ struct FusionSummary {
   float spread_m = 0, spread_deg = 0;
 };
 
+// The companion sensor's part in a pose (fusion.companion runs only).
+struct CompanionNote {
+  bool configured = false;
+  bool present = false;   // an estimate recent enough for this cycle
+  uint8_t from = 0;       // FusedFrom (runtime/pose/sensor_fusion.h): what went out
+  bool disagree = false;  // both valid, apart
+  uint32_t flags = 0;     // the companion estimate's own flags
+  float distance_m = -1;  // between the two estimates (-1: not both present)
+  float yaw_diff_deg = -1;
+  float age_ms = -1;  // how much older the companion's frame is than this cycle's (-1: none)
+};
+
 struct PoseRecord {
   uint64_t index = 0;           // n-th pose of this run
   uint64_t frame_sequence = 0;  // source frame counter
@@ -41,6 +53,7 @@ struct PoseRecord {
   double truth_orientation[4] = {1, 0, 0, 0};
   char name[128] = {};
   FusionSummary fusion;
+  CompanionNote companion;
 };
 
 }  // namespace aprt

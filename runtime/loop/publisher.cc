@@ -9,6 +9,7 @@
 
 #include "runtime/base/clock.h"
 #include "runtime/pose/pose_gate.h"
+#include "runtime/pose/sensor_fusion.h"
 
 namespace aprt {
 
@@ -38,8 +39,8 @@ Publisher::Publisher(const Config& config, PoseRing& ring, PoseOutputs& outputs,
       pos_errors_(capacity),
       rot_errors_(capacity) {}
 
-void Publisher::publish_status(double last_inference_ms,
-                               const FusionSummary& last_fusion) noexcept {
+void Publisher::publish_status(double last_inference_ms, const FusionSummary& last_fusion,
+                               const CompanionNote& last_companion) noexcept {
   StatusSnapshot st;
   st.state = shared_.run_state();
   st.reason = shared_.reason.load(std::memory_order_acquire);
@@ -50,6 +51,7 @@ void Publisher::publish_status(double last_inference_ms,
   st.last_flags = shared_.last_flags.load(std::memory_order_relaxed);
   st.last_inference_ms = last_inference_ms;
   st.fusion = &last_fusion;
+  st.companion = &last_companion;
   if (scans_) {
     st.lidar = true;
     st.scan_points = shared_.scan_points.load(std::memory_order_relaxed);
@@ -77,11 +79,12 @@ void Publisher::run() noexcept {
   int64_t next_status = monotonic_ns();
   double last_inference_ms = 0;
   FusionSummary last_fusion;
+  CompanionNote last_companion;
   for (;;) {
     shared_.publish_beat.store(monotonic_ns(), std::memory_order_release);
     if (monotonic_ns() >= next_status) {
       next_status += status_period;
-      publish_status(last_inference_ms, last_fusion);
+      publish_status(last_inference_ms, last_fusion, last_companion);
     }
     print_state_lines();
     if (!ring_.pop(&r)) {
@@ -103,6 +106,7 @@ void Publisher::run() noexcept {
                                 std::memory_order_release);
     last_inference_ms = double(r.inference_end_ns - r.inference_start_ns) * 1e-6;
     last_fusion = r.fusion;
+    last_companion = r.companion;
     if (timing_count_ < timings_.size()) {
       timings_[timing_count_++] = {r.capture_ns, r.inference_start_ns, r.inference_end_ns, now,
                                    r.flags};
@@ -131,6 +135,12 @@ void Publisher::print_pose(const PoseRecord& r) const {
     std::snprintf(cams, sizeof cams, " cams %u/%u", unsigned(r.fusion.inliers),
                   unsigned(r.fusion.cameras));
     add(cams);
+  }
+  if (r.companion.configured) {  // whose estimate went out: own, companion or both
+    add(r.companion.from == uint8_t(FusedFrom::kBoth)        ? " from both"
+        : r.companion.from == uint8_t(FusedFrom::kCompanion) ? " from companion"
+        : r.companion.present                                ? " from own"
+                                                             : " from own (companion stale)");
   }
   if (std::strncmp(flags, "ok,", 3) == 0)
     std::memmove(flags, flags + 3, std::strlen(flags + 3) + 1);

@@ -19,7 +19,7 @@
 
 namespace aprt {
 
-Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
+Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config, const Config* companion) {
   std::unique_ptr<Runtime> r(new (std::nothrow) Runtime());
   if (!r) return Error(Errc::kOutOfMemory, "run: out of memory");
   r->config_ = config;
@@ -53,6 +53,24 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config) {
   }
   r->estimator_.reset(new (std::nothrow)
                           Estimator(c, r->channel_ptrs_.data(), r->channel_ptrs_.size()));
+  if (companion) {
+    auto co = Companion::create(*companion, c.fusion.companion_max_age_ms);
+    if (!co) return co.error();
+    r->companion_ = std::move(co.value());
+    r->sensor_fusion_.max_position_spread_m = c.fusion.max_position_spread_m;
+    r->sensor_fusion_.max_yaw_spread_rad = c.fusion.max_orientation_spread_deg * M_PI / 180.0;
+    r->sensor_fusion_.min_lead_s = c.fusion.min_lead_s;
+    r->sensor_fusion_.cross_check = c.fusion.cross_check;
+    const ModelMeta& m = r->models_->running().meta();
+    if (m.has_val_error) {
+      r->own_sigma_pos_m_ = double(m.val_error_position_m);
+      r->own_sigma_rot_rad_ = double(m.val_error_orientation_deg) * M_PI / 180.0;
+    }
+    if (c.output.sigma_position_m > 0) r->own_sigma_pos_m_ = c.output.sigma_position_m;
+    if (c.output.sigma_orientation_deg > 0) {
+      r->own_sigma_rot_rad_ = c.output.sigma_orientation_deg * M_PI / 180.0;
+    }
+  }
   auto outputs = PoseOutputs::create(c, r->models_->running().meta());
   if (!outputs) return outputs.error();
   r->outputs_ = std::move(outputs.value());
@@ -87,6 +105,10 @@ const char* Runtime::join_threads_by(int64_t deadline_ns) {
   for (auto& c : channels_) {
     if (c->started && join(c->thread) != 0) return c->thread_name.c_str();
     c->started = false;
+  }
+  if (companion_ && companion_->channel().started) {
+    if (join(companion_->channel().thread) != 0) return "aprt-companion";
+    companion_->channel().started = false;
   }
   if (inference_started_ && join(inference_) != 0) return "aprt-infer";
   inference_started_ = false;
@@ -198,6 +220,7 @@ void Runtime::inference_loop() {
     rec.inference_end_ns = monotonic_ns();
     if (save_index_ >= 0 && uint64_t(save_index_) == index) write_saved_frame(*f, rec, *e);
     flags = est.check(rec, flags);
+    if (companion_) flags = fuse_companion(&rec, flags);
     shared_.deadline_misses.store(est.deadline_misses(), std::memory_order_relaxed);
     rec.flags = flags;
     rec.index = index++;
@@ -215,6 +238,37 @@ void Runtime::inference_loop() {
   shared_.inference_done.store(true, std::memory_order_release);
 }
 
+uint32_t Runtime::fuse_companion(PoseRecord* rec, uint32_t flags) noexcept {
+  Companion& co = *companion_;
+  co.poll();
+  SensorEstimate own = sensor_estimate(*rec, flags, own_sigma_pos_m_, own_sigma_rot_rad_);
+  own.valid_for_s = own_streak_.update(own.flags == 0, estimator_->last_gate_s());
+  const SensorEstimate other = co.at(rec->capture_ns);
+  const SensorFusionResult r = fuse_sensors(own, other, sensor_fusion_);
+  CompanionNote& n = rec->companion;
+  n.configured = true;
+  n.present = other.present;
+  n.from = uint8_t(r.from);
+  n.disagree = r.disagree;
+  n.flags = other.flags;
+  n.distance_m = float(r.distance_m);
+  n.yaw_diff_deg = r.yaw_diff_rad < 0 ? -1.0f : float(r.yaw_diff_rad * 180.0 / M_PI);
+  Companion::Stats& st = co.stats();
+  if (other.present) {
+    const double age_ms = double(rec->capture_ns - co.latest_capture_ns()) * 1e-6;
+    n.age_ms = float(age_ms);
+    st.age_sum_ms += age_ms;
+    st.age_max_ms = std::max(st.age_max_ms, age_ms);
+  }
+  if (r.pose.flags == 0) ++st.used[size_t(r.from) & 3];
+  if (r.disagree) ++st.disagreements;
+  if (!other.present) ++st.stale;
+  // The run's own estimate going out (valid or shown flagged) stays exactly as it was.
+  if (r.from == FusedFrom::kPrimary) return r.pose.flags;
+  write_fused(r.pose, channels_[0]->base_from_sensor, rec);
+  return r.pose.flags;
+}
+
 // What the supervisor sees at one tick.
 Health Runtime::health(int64_t now_ns) const {
   Health h;
@@ -227,12 +281,16 @@ Health Runtime::health(int64_t now_ns) const {
   const bool inference_done = shared_.inference_done.load(std::memory_order_acquire);
   h.capture_beat_ns = h.now_ns;
   h.source_failed = false;
-  for (const auto& c : channels_) {
-    if (!c->done.load(std::memory_order_acquire)) {
-      h.capture_beat_ns = std::min(h.capture_beat_ns, c->beat.load(std::memory_order_acquire));
+  const auto watch = [&](const CaptureChannel& c) {
+    if (!c.done.load(std::memory_order_acquire)) {
+      h.capture_beat_ns = std::min(h.capture_beat_ns, c.beat.load(std::memory_order_acquire));
     }
-    h.source_failed = h.source_failed || c->failed.load(std::memory_order_acquire);
-  }
+    h.source_failed = h.source_failed || c.failed.load(std::memory_order_acquire);
+  };
+  for (const auto& c : channels_) watch(*c);
+  // A companion that stalls or fails degrades the run like a camera would;
+  // its end (a shorter replay) ends nothing.
+  if (companion_) watch(companion_->channel());
   h.inference_beat_ns =
       inference_done ? h.now_ns : shared_.inference_beat.load(std::memory_order_acquire);
   h.publish_beat_ns = shared_.publish_beat.load(std::memory_order_acquire);
@@ -274,6 +332,7 @@ int Runtime::run() {
   started_ns_ = monotonic_ns();
   shared_.inference_beat = shared_.publish_beat = started_ns_;
   for (auto& c : channels_) c->beat = started_ns_;
+  if (companion_) companion_->channel().beat = started_ns_;
   publisher_->set_started(started_ns_);
   const size_t stack = thread_stack_bytes(config_.threads);
   Status s;
@@ -288,18 +347,28 @@ int Runtime::run() {
     set_fatal_handler(previous);
     return 1;
   }
-  for (auto& c : channels_) {
-    c->run_channels = channels_.size();
-    c->shared = &shared_;
-    c->faults = &faults_;
-    if (!(s = start_thread(&c->thread, capture_thread, c.get(), config_.threads.capture,
-                           c->thread_name.c_str(), stack))) {
+  // Each camera's capture thread, then the companion's (which injects no faults).
+  const auto start_capture = [&](CaptureChannel& c, size_t run_channels,
+                                 const FaultInjector* faults) {
+    c.run_channels = run_channels;
+    c.shared = &shared_;
+    c.faults = faults;
+    if (!(s = start_thread(&c.thread, capture_thread, &c, config_.threads.capture,
+                           c.thread_name.c_str(), stack))) {
       std::fprintf(stderr, "aprt run: %s\n", s.error().message());
       request_stop();
       set_fatal_handler(previous);
-      return 1;
+      return false;
     }
-    c->started = true;
+    c.started = true;
+    return true;
+  };
+  for (auto& c : channels_) {
+    if (!start_capture(*c, channels_.size(), &faults_)) return 1;
+  }
+  // The run has one channel more; the companion's messages carry its name.
+  if (companion_ && !start_capture(companion_->channel(), channels_.size() + 1, &no_faults_)) {
+    return 1;
   }
   if (!(s = models_->start_loader())) {
     std::fprintf(stderr, "aprt run: %s\n", s.error().message());
@@ -348,9 +417,30 @@ int Runtime::run() {
     if (budget_valid_) memory_budget_text(budget_, memory, sizeof memory);
     sum.memory = memory;
     print_run_summary(sum);
+    if (companion_) print_companion_summary();
     outputs_->print_summary();
   }
   return code;
+}
+
+void Runtime::print_companion_summary() const {
+  const Companion& co = *companion_;
+  const Companion::Stats& st = co.stats();
+  const CaptureChannel& ch = co.channel();
+  const auto u = [](uint64_t v) { return static_cast<unsigned long long>(v); };
+  const uint64_t poses = shared_.poses.load();
+  const uint64_t valid = st.used[1] + st.used[2] + st.used[3];
+  std::printf(
+      "companion: %s on %s: %llu frames captured, %llu estimates (%llu valid by its own gate)\n"
+      "  valid poses: %llu of %llu (both sensors %llu, own alone %llu, companion alone %llu); "
+      "%llu cycles both valid but apart (fusion.max_position_spread_m / "
+      "max_orientation_spread_deg); %llu cycles without a companion estimate within "
+      "companion_max_age_ms; its estimates %.1f ms older than the cycle's frame on average, "
+      "%.1f ms at most\n",
+      co.config().model.c_str(), co.config().origin.c_str(), u(ch.captured.load()), u(st.estimates),
+      u(st.valid), u(valid), u(poses), u(st.used[3]), u(st.used[1]), u(st.used[2]),
+      u(st.disagreements), u(st.stale),
+      poses > st.stale ? st.age_sum_ms / double(poses - st.stale) : 0.0, st.age_max_ms);
 }
 
 void Runtime::collect_stats() {

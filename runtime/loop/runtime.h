@@ -29,6 +29,7 @@
 #include "runtime/config/config.h"
 #include "runtime/engine/engine.h"
 #include "runtime/loop/capture.h"
+#include "runtime/loop/companion.h"
 #include "runtime/loop/estimator.h"
 #include "runtime/loop/fault_injector.h"
 #include "runtime/loop/loop_shared.h"
@@ -45,7 +46,10 @@ namespace aprt {
 
 class Runtime {
  public:
-  static Expected<std::unique_ptr<Runtime>> create(const Config& config);
+  // `companion`: the configuration of fusion.companion, its paths resolved
+  // (companion.h); null: none.
+  static Expected<std::unique_ptr<Runtime>> create(const Config& config,
+                                                   const Config* companion = nullptr);
   ~Runtime();
 
   // Runs until the replay ends, request_stop(), or FAULT. Returns the exit
@@ -60,6 +64,8 @@ class Runtime {
   const RunStats& stats() const { return stats_; }
   const Engine& engine() const { return models_->running(); }
   const PoseOutputs& outputs() const { return *outputs_; }
+  // The second sensor (fusion.companion), or null.
+  const Companion* companion() const { return companion_.get(); }
   // Timing of every published pose, in order (capacity fixed at create()).
   const TimingRecord* timings(size_t* count) const { return publisher_->timings(count); }
   // The process's allocation counter (allocation_counter.h), if the program
@@ -95,9 +101,12 @@ class Runtime {
   static void* inference_main(void* self);
   static void* publish_main(void* self);
   void inference_loop();
+  // The companion's newest estimate fused into `rec` (inference thread); the pose's flags.
+  uint32_t fuse_companion(PoseRecord* rec, uint32_t flags) noexcept;
   Health health(int64_t now_ns) const;
   void sample_memory();
   void collect_stats();
+  void print_companion_summary() const;
   void write_saved_frame(const FrameBuffer& f, const PoseRecord& rec, const Engine& e);
   // Joins every started thread by `deadline_ns` (monotonic); the name of the
   // first that did not stop by then, or nullptr.
@@ -111,6 +120,11 @@ class Runtime {
   std::vector<std::unique_ptr<CaptureChannel>> channels_;  // [0] is the trigger
   std::vector<CaptureChannel*> channel_ptrs_;
   std::unique_ptr<Estimator> estimator_;
+  std::unique_ptr<Companion> companion_;  // fusion.companion, or null
+  FaultInjector no_faults_;               // the companion's capture thread injects none
+  SensorFusionParams sensor_fusion_;
+  double own_sigma_pos_m_ = 1, own_sigma_rot_rad_ = 0.1;  // the run's model without sigma
+  ValidStreak own_streak_;
   std::unique_ptr<PoseRing> ring_;
   std::unique_ptr<PoseOutputs> outputs_;
   std::unique_ptr<Publisher> publisher_;

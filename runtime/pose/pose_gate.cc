@@ -86,6 +86,18 @@ bool PoseGate::consistent(const Track& k, double t, double x, double y, double y
   return d <= gate && std::fabs(wrap(yaw - pyaw)) <= p_.gate_deg * kPi / 180.0;
 }
 
+bool PoseGate::motion(double t0, double t1, double* dx, double* dy, double* dyaw) const noexcept {
+  *dx = *dy = *dyaw = 0;
+  if (!tracking() || track_.size == 0) return false;
+  double x0, y0, a0, x1, y1, a1;
+  track_.predict(t0, p_.max_speed_mps, &x0, &y0, &a0);
+  track_.predict(t1, p_.max_speed_mps, &x1, &y1, &a1);
+  *dx = x1 - x0;
+  *dy = y1 - y0;
+  *dyaw = a1 - a0;
+  return true;
+}
+
 void PoseGate::reset() noexcept {
   track_.clear();
   candidate_.clear();

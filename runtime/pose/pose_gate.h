@@ -87,6 +87,10 @@ class PoseGate {
   void reset() noexcept;
 
   bool tracking() const { return track_.count >= p_.confirm; }
+  // The confirmed track's motion from time t0 to t1 (its constant-velocity
+  // prediction at t1 minus at t0): false, and zeros, without a confirmed
+  // track. Moves an estimate of this sensor onto another sensor's time. @rt.
+  bool motion(double t0, double t1, double* dx, double* dy, double* dyaw) const noexcept;
 
   // A run of mutually consistent estimates: the newest kWindow of them (at
   // most kWindowS seconds back) give the constant-velocity prediction (least
