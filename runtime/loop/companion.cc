@@ -36,6 +36,20 @@ SensorEstimate sensor_estimate(const PoseRecord& rec, uint32_t flags, double sig
   return e;
 }
 
+void fallback_sigma(const Config& config, const ModelMeta& meta, double* position_m,
+                    double* rotation_rad) {
+  *position_m = 1.0;
+  *rotation_rad = 0.1;
+  if (meta.has_val_error) {
+    *position_m = double(meta.val_error_position_m);
+    *rotation_rad = double(meta.val_error_orientation_deg) * M_PI / 180.0;
+  }
+  if (config.output.sigma_position_m > 0) *position_m = config.output.sigma_position_m;
+  if (config.output.sigma_orientation_deg > 0) {
+    *rotation_rad = config.output.sigma_orientation_deg * M_PI / 180.0;
+  }
+}
+
 void write_fused(const SensorEstimate& fused, const Eigen::Isometry3d& base_from_sensor,
                  PoseRecord* rec) noexcept {
   const PoseEstimate before = rec->pose;
@@ -84,15 +98,7 @@ Expected<std::unique_ptr<Companion>> Companion::create(const Config& config, dou
   c->channels_[0] = c->channel_.get();
   c->estimator_.reset(new (std::nothrow) Estimator(cfg, c->channels_, 1));
   if (!c->estimator_) return Error(Errc::kOutOfMemory, "run: out of memory");
-  const ModelMeta& m = c->engine_->meta();
-  if (m.has_val_error) {
-    c->sigma_pos_m_ = double(m.val_error_position_m);
-    c->sigma_rot_rad_ = double(m.val_error_orientation_deg) * M_PI / 180.0;
-  }
-  if (cfg.output.sigma_position_m > 0) c->sigma_pos_m_ = cfg.output.sigma_position_m;
-  if (cfg.output.sigma_orientation_deg > 0) {
-    c->sigma_rot_rad_ = cfg.output.sigma_orientation_deg * M_PI / 180.0;
-  }
+  fallback_sigma(cfg, c->engine_->meta(), &c->sigma_pos_m_, &c->sigma_rot_rad_);
   return c;
 }
 

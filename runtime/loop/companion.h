@@ -35,6 +35,11 @@ namespace aprt {
 SensorEstimate sensor_estimate(const PoseRecord& rec, uint32_t flags, double sigma_pos_m,
                                double sigma_rot_rad) noexcept;
 
+// The sigma an estimate has when its model gives none for the frame: the
+// configured output.sigma_*, else the model's validation error, else 1 m / 0.1 rad.
+void fallback_sigma(const Config& config, const ModelMeta& meta, double* position_m,
+                    double* rotation_rad);
+
 // `fused` written back into the record: base_link, and the pose and sigma of
 // the trigger sensor mounted at `base_from_sensor` (console, errors, covariance). @rt.
 void write_fused(const SensorEstimate& fused, const Eigen::Isometry3d& base_from_sensor,

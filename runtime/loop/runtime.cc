@@ -61,15 +61,7 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config, const C
     r->sensor_fusion_.max_yaw_spread_rad = c.fusion.max_orientation_spread_deg * M_PI / 180.0;
     r->sensor_fusion_.min_lead_s = c.fusion.min_lead_s;
     r->sensor_fusion_.cross_check = c.fusion.cross_check;
-    const ModelMeta& m = r->models_->running().meta();
-    if (m.has_val_error) {
-      r->own_sigma_pos_m_ = double(m.val_error_position_m);
-      r->own_sigma_rot_rad_ = double(m.val_error_orientation_deg) * M_PI / 180.0;
-    }
-    if (c.output.sigma_position_m > 0) r->own_sigma_pos_m_ = c.output.sigma_position_m;
-    if (c.output.sigma_orientation_deg > 0) {
-      r->own_sigma_rot_rad_ = c.output.sigma_orientation_deg * M_PI / 180.0;
-    }
+    fallback_sigma(c, r->models_->running().meta(), &r->own_sigma_pos_m_, &r->own_sigma_rot_rad_);
   }
   auto outputs = PoseOutputs::create(c, r->models_->running().meta());
   if (!outputs) return outputs.error();

@@ -16,6 +16,7 @@
 #include "runtime/base/allocation_counter.h"
 #include "runtime/config/config.h"
 #include "runtime/loop/runtime.h"
+#include "tests/support/loop_test_config.h"
 
 namespace aprt {
 namespace {
@@ -26,22 +27,10 @@ std::string fixtures() {
 }
 
 Config sensor_config(const char* model, SourceType type) {
-  Config c;
-  c.model = fixtures() + "/golden/" + model + "/model.aprt";
-  c.source.type = type;
-  c.source.replay.path = fixtures() + "/run_lidar";
+  Config c = test::loop_test_config(fixtures() + "/golden/" + model + "/model.aprt", type,
+                                    fixtures() + "/run_lidar");
   c.source.replay.rate_hz = 20;  // both at one rate: frame i and scan i together
-  c.output.console = false;
   c.output.summary = true;
-  c.output.sigma_position_m = 2.0;
-  c.output.sigma_orientation_deg = 3.0;
-  c.sanity.bounds_margin = 10;  // test models: only non-finite output is flagged
-  c.sanity.max_jump_m = 0;
-  c.supervisor.inference_deadline_ms = 10000;
-  c.supervisor.frame_timeout_ms = 10000;
-  c.supervisor.systemd = false;
-  c.supervisor.fault_after_s = 600;
-  c.threads.lock_memory = false;
   return c;
 }
 

@@ -29,6 +29,7 @@
 #include "runtime/base/allocation_counter.h"
 #include "runtime/config/config.h"
 #include "runtime/loop/runtime.h"
+#include "tests/support/loop_test_config.h"
 #include "tests/support/model_builder.h"
 
 namespace aprt {
@@ -44,23 +45,8 @@ uint32_t test_domain() {
 }
 
 Config lidar_config(const std::string& model) {
-  Config c;
-  c.model = fixtures() + "/golden/" + model + "/model.aprt";
-  c.source.type = SourceType::kLidarReplay;
-  c.source.replay.path = fixtures() + "/run_lidar";
-  c.source.replay.rate_hz = 0;  // as fast as inference takes scans
-  c.output.console = false;
-  c.output.summary = false;
-  c.output.sigma_position_m = 2.0;
-  c.output.sigma_orientation_deg = 3.0;
-  c.sanity.bounds_margin = 10;  // test models: only non-finite output is flagged
-  c.sanity.max_jump_m = 0;
-  c.supervisor.inference_deadline_ms = 10000;
-  c.supervisor.frame_timeout_ms = 10000;
-  c.supervisor.systemd = false;
-  c.supervisor.fault_after_s = 600;  // untrained test models: insane output is DEGRADED, no more
-  c.threads.lock_memory = false;
-  return c;
+  return test::loop_test_config(fixtures() + "/golden/" + model + "/model.aprt",
+                                SourceType::kLidarReplay, fixtures() + "/run_lidar");
 }
 
 size_t count_lines(const std::string& path) {
