@@ -18,6 +18,7 @@
 #include "drivers/output/can/dbc.h"
 #include "drivers/output/can/pose_can_codec.h"
 #include "drivers/output/can/socketcan.h"
+#include "runtime/base/angles.h"
 #include "runtime/base/file_io.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
@@ -93,8 +94,7 @@ struct Printer {
       std::printf("warning: the DBC and aprt's codec decode this estimate differently\n");
     }
     if (quiet) return;
-    const double yaw =
-        std::atan2(2 * (s.qw * s.qz + s.qx * s.qy), 1 - 2 * (s.qy * s.qy + s.qz * s.qz));
+    const double yaw = yaw_of_quaternion(s.qw, s.qx, s.qy, s.qz);
     const can::DbcMessage* sm = msg(st_id);
     const can::DbcSignal* state_sig = sm ? sm->signal("State") : nullptr;
     const char* state_name = "?";

@@ -8,7 +8,6 @@
 namespace aprt::cli {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kChi2_95 = 5.991464547107979;  // 2 degrees of freedom
 constexpr double kZ95 = 1.959963984540054;
 
@@ -48,9 +47,7 @@ void coverage_of(const PoseEstimate& p, const double truth_position[3],
   const double ex = p.position[0] - truth_position[0], ey = p.position[1] - truth_position[1];
   const double sx = p.sigma_position_m[0], sy = p.sigma_position_m[1];
   *inside_position = (ex * ex) / (sx * sx) + (ey * ey) / (sy * sy) <= kChi2_95;
-  double dyaw = quaternion_yaw(p.orientation) - quaternion_yaw(truth_orientation);
-  while (dyaw > kPi) dyaw -= 2 * kPi;
-  while (dyaw < -kPi) dyaw += 2 * kPi;
+  const double dyaw = wrap_angle(quaternion_yaw(p.orientation) - quaternion_yaw(truth_orientation));
   *inside_yaw = std::fabs(dyaw) <= kZ95 * p.sigma_rotation_rad[2];
 }
 

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "runtime/base/angles.h"
 #include "runtime/base/clock.h"
 #include "runtime/pose/pose_gate.h"
 #include "runtime/pose/sensor_fusion.h"
@@ -14,8 +15,7 @@
 namespace aprt {
 
 double quat_yaw_deg(const double* q) {
-  const double w = q[0], x = q[1], y = q[2], z = q[3];
-  return std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)) * 180.0 / M_PI;
+  return quaternion_yaw(q) * 180.0 / M_PI;
 }
 
 double quat_angle_deg(const double* a, const double* b) {

@@ -5,26 +5,14 @@
 namespace aprt {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kChi2Sqrt95 = 2.447746830680816;  // sqrt(chi^2_2(0.95)): the 95 % ellipse
 constexpr double kZ95 = 1.959963984540054;
 
-double wrap(double a) {
-  while (a > kPi) a -= 2 * kPi;
-  while (a < -kPi) a += 2 * kPi;
-  return a;
-}
-
 }  // namespace
-
-double quaternion_yaw(const double q[4]) noexcept {
-  const double w = q[0], x = q[1], y = q[2], z = q[3];
-  return std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z));
-}
 
 void PoseGate::Track::add(double tn, double xn, double yn, double yawn) noexcept {
   // Yaw unwrapped against the newest: the least-squares line sees no 2 pi steps.
-  if (size > 0) yawn = last_yaw() + wrap(yawn - last_yaw());
+  if (size > 0) yawn = last_yaw() + wrap_angle(yawn - last_yaw());
   t[head] = tn;
   x[head] = xn;
   y[head] = yn;
@@ -83,7 +71,7 @@ bool PoseGate::consistent(const Track& k, double t, double x, double y, double y
   const double since = t - k.last_t();
   const double gate = p_.gate_m + p_.gate_growth_mps * (since > 0 ? since : 0);
   const double d = std::hypot(x - px, y - py);
-  return d <= gate && std::fabs(wrap(yaw - pyaw)) <= p_.gate_deg * kPi / 180.0;
+  return d <= gate && std::fabs(wrap_angle(yaw - pyaw)) <= p_.gate_deg * kPiRad / 180.0;
 }
 
 bool PoseGate::motion(double t0, double t1, double* dx, double* dy, double* dyaw) const noexcept {
@@ -135,7 +123,7 @@ uint32_t PoseGate::gate(const PoseEstimate& e, double t, uint32_t flags) noexcep
   bool usable = (flags | out) == 0;
   if (e.has_sigma) {
     const double r = kChi2Sqrt95 * std::fmax(e.sigma_position_m[0], e.sigma_position_m[1]);
-    const double yaw_interval = kZ95 * e.sigma_rotation_rad[2] * 180.0 / kPi;
+    const double yaw_interval = kZ95 * e.sigma_rotation_rad[2] * 180.0 / kPiRad;
     if (!(r <= p_.max_position_radius_m) || !(yaw_interval <= p_.max_yaw_interval_deg)) {
       out |= kPoseUncertain;
       usable = false;

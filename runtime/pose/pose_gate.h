@@ -23,6 +23,7 @@
 
 #include <cstdint>
 
+#include "runtime/base/angles.h"
 #include "runtime/engine/pose_decode.h"
 #include "runtime/pose/pose_flags.h"
 
@@ -123,8 +124,5 @@ class PoseGate {
   Track track_;      // confirmed when count >= confirm
   Track candidate_;  // estimates the track refused, agreeing among themselves
 };
-
-// The yaw (rad) of a w x y z quaternion, about the map's z axis.
-double quaternion_yaw(const double q[4]) noexcept;
 
 }  // namespace aprt

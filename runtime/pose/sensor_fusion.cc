@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "runtime/base/angles.h"
 #include "runtime/engine/pose_decode.h"
 #include "runtime/pose/pose_flags.h"
 
@@ -9,11 +10,7 @@ namespace aprt {
 namespace {
 
 double yaw_of(const Eigen::Quaterniond& q) {
-  return std::atan2(2 * (q.w() * q.z() + q.x() * q.y()), 1 - 2 * (q.y() * q.y() + q.z() * q.z()));
-}
-
-double wrapped(double a) {
-  return std::remainder(a, 2 * M_PI);
+  return yaw_of_quaternion(q.w(), q.x(), q.y(), q.z());
 }
 
 }  // namespace
@@ -33,7 +30,7 @@ SensorFusionResult fuse_sensors(const SensorEstimate& a, const SensorEstimate& b
   SensorFusionResult r;
   if (a.present && b.present) {
     r.distance_m = std::hypot(a.position.x() - b.position.x(), a.position.y() - b.position.y());
-    r.yaw_diff_rad = std::fabs(wrapped(yaw_of(a.orientation) - yaw_of(b.orientation)));
+    r.yaw_diff_rad = std::fabs(wrap_angle(yaw_of(a.orientation) - yaw_of(b.orientation)));
   }
   const auto take = [&](const SensorEstimate& e, FusedFrom from) {
     r.pose = e;

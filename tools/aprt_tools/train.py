@@ -67,9 +67,8 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     configuration has none; they learn the pose's error scales (uncertainty_nll).
     resize: with `init` on an image model, train at this input side instead
     of the initial model's (e.g. 64 -> 96): every convolution and the
-    transformer carry over unchanged; the learned position tables are indexed
-    from the top-left corner, so the larger feature maps also use cells the
-    smaller input never reached, which start from their initial values.
+    transformer carry over unchanged; the learned position tables are
+    stretched to the larger feature maps (stretch_position_tables).
     ema: keep an exponential moving average of the weights with this decay per
     step (e.g. 0.999) and evaluate, save and export it; 0: the weights as trained.
     workers: data-parallel processes sharing `threads` (the batch is split
@@ -154,6 +153,8 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
         state = checkpoint["model_state_dict"]
         if "bn_frames" in checkpoint:  # a model file: its BatchNorm re-estimated on these frames
             state = _model_file_state(checkpoint, imgs[tr], cfg, file_size, log)
+        if cfg.image_size != file_size:
+            state = stretch_position_tables(state, file_size, cfg.image_size)
         missing, unexpected = model.load_state_dict(state, strict=False)
         if unexpected or any(not (k.startswith("uncertainty_head") and not had_heads)
                              for k in missing):
@@ -185,6 +186,33 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     model.load_state_dict(final["model_state_dict"])
     cfg.dropout = 0.0
     return model, cfg
+
+
+def stretch_position_tables(state: dict, old_side: int, new_side: int) -> dict:
+    """The learned position tables of a model trained at input side
+    old_side, resampled for new_side (the usual way a transformer's learned
+    positions follow a change of resolution: Dosovitskiy et al. 2021, sec. 3.2).
+    Row k of a feature map of n cells covers the image around (k + 0.5) / n,
+    so the new row k reads the old table at (k + 0.5) * old / new - 0.5,
+    linearly between the two nearest rows. The two feature maps (side / 16 and
+    side / 8) share the tables and scale by the same factor, so one
+    resampling serves both; rows beyond the finer map's reach are kept."""
+    state = dict(state)
+    n_old, n_new = old_side // 8, new_side // 8
+    for key in ("backbone.1.row_embed.weight", "backbone.1.col_embed.weight"):
+        table = state[key].clone()
+        if n_new > table.shape[0]:
+            raise ValueError(f"input side {new_side} needs {n_new} position cells, the tables "
+                             f"have {table.shape[0]}")
+        old = state[key][:n_old]
+        src = ((torch.arange(n_new, dtype=torch.float64) + 0.5) * old_side / new_side - 0.5)
+        src = src.clamp(0, n_old - 1)
+        lo = src.floor().long().clamp(max=n_old - 1)
+        hi = (lo + 1).clamp(max=n_old - 1)
+        w = (src - lo.double()).unsqueeze(1).to(table.dtype)
+        table[:n_new] = old[lo] * (1 - w) + old[hi] * w
+        state[key] = table
+    return state
 
 
 def _load_init(init: str, log) -> dict:
