@@ -109,14 +109,10 @@ void Companion::poll() noexcept {
   if (ch.replay()) ch.source->note_taken(f->info.sequence + 1);
   if (!estimator_->fits(0, *f)) return;
   PoseRecord rec;
-  rec.inference_start_ns = monotonic_ns();
-  rec.capture_ns = f->info.capture_ns;
-  rec.source_stamp_ns = f->info.source_stamp_ns;
+  const uint32_t stale = estimator_->start(*f, &rec);
   const FrameBuffer* frames[1] = {f};
-  uint32_t flags = estimator_->infer(*engine_, frames, false, &rec);
+  uint32_t flags = estimator_->infer(*engine_, frames, false, &rec) | stale;
   rec.inference_end_ns = monotonic_ns();
-  const int64_t stale_ns = int64_t(config_.supervisor.frame_timeout_ms * 1e6);
-  if (rec.inference_start_ns - rec.capture_ns > stale_ns) flags |= kPoseStaleFrame;
   flags = estimator_->check(rec, flags);
   latest_ = sensor_estimate(rec, flags, sigma_pos_m_, sigma_rot_rad_);
   latest_capture_ns_ = rec.capture_ns;

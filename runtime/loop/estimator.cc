@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "runtime/base/clock.h"
+
 namespace aprt {
 
 Estimator::Estimator(const Config& config, CaptureChannel* const* channels, size_t n)
@@ -11,11 +13,21 @@ Estimator::Estimator(const Config& config, CaptureChannel* const* channels, size
       n_(n),
       bounds_margin_(float(config.sanity.bounds_margin)),
       min_points_(config.source.lidar.min_points),
+      stale_ns_(int64_t(config.supervisor.frame_timeout_ms * 1e6)),
       deadline_ns_(int64_t(config.supervisor.inference_deadline_ms * 1e6)) {
   fusion_.max_position_spread_m = config.fusion.max_position_spread_m;
   fusion_.max_orientation_spread_rad = config.fusion.max_orientation_spread_deg * M_PI / 180.0;
   fusion_.min_agreeing = config.fusion.min_agreeing;
   gate_ = PoseGate(pose_gate_params(config));
+}
+
+uint32_t Estimator::start(const FrameBuffer& f, PoseRecord* rec) const noexcept {
+  rec->inference_start_ns = monotonic_ns();
+  rec->capture_ns = f.info.capture_ns;
+  rec->source_stamp_ns = f.info.source_stamp_ns;
+  rec->frame_sequence = f.info.sequence;
+  rec->source = f.info.source;
+  return rec->inference_start_ns - f.info.capture_ns > stale_ns_ ? kPoseStaleFrame : 0;
 }
 
 PoseGateParams pose_gate_params(const Config& config) {

@@ -35,6 +35,11 @@ class Estimator {
   // channels: the run's channels (configuration order), n of them.
   Estimator(const Config& config, CaptureChannel* const* channels, size_t n);
 
+  // Stamps rec with frame f's times and source and the inference's start;
+  // returns kPoseStaleFrame when f waited longer than the supervisor's
+  // frame_timeout_ms, else 0 (the run's cycle and a companion's alike).
+  uint32_t start(const FrameBuffer& f, PoseRecord* rec) const noexcept;
+
   // Whether channel i's frame fits its engine input (a camera that
   // renegotiated is re-planned); false: the frame is skipped.
   bool fits(size_t i, const FrameBuffer& f) noexcept;
@@ -69,6 +74,7 @@ class Estimator {
   size_t n_;
   float bounds_margin_;
   int min_points_;
+  int64_t stale_ns_;
   int64_t deadline_ns_;
   FusionParams fusion_;
   PoseGate gate_;

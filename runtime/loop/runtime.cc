@@ -143,7 +143,6 @@ void* Runtime::publish_main(void* self) {
 
 void Runtime::inference_loop() {
   Engine* e = models_->first();
-  const int64_t stale_ns = int64_t(config_.supervisor.frame_timeout_ms * 1e6);
   const int64_t skew_ns = int64_t(config_.fusion.max_frame_skew_ms * 1e6);
   const size_t n_cams = channels_.size();
   CaptureChannel& trigger = *channels_[0];
@@ -169,13 +168,7 @@ void Runtime::inference_loop() {
       e = next;
     }
     PoseRecord rec;
-    rec.inference_start_ns = monotonic_ns();
-    rec.capture_ns = f->info.capture_ns;
-    rec.source_stamp_ns = f->info.source_stamp_ns;
-    rec.frame_sequence = f->info.sequence;
-    rec.source = f->info.source;
-    uint32_t flags = 0;
-    if (rec.inference_start_ns - f->info.capture_ns > stale_ns) flags |= kPoseStaleFrame;
+    uint32_t flags = est.start(*f, &rec);
     if (!est.fits(0, *f)) {
       shared_.frames_skipped.fetch_add(1, std::memory_order_relaxed);
       continue;
