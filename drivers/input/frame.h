@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "drivers/input/odometry.h"
 #include "runtime/base/image.h"
 #include "runtime/base/lidar_point.h"
 
@@ -39,6 +40,10 @@ struct FrameInfo {
   double truth_position[3] = {};
   double truth_orientation[4] = {1, 0, 0, 0};  // w x y z
   char name[128] = {};                         // e.g. the image file of a replayed frame
+  // Where the vehicle's odometry put it at this frame, when the source knows
+  // (a replay with odometry.txt; drivers/input/odometry.h): what the pose
+  // filter carries its pose with between frames (runtime/pose/pose_filter.h).
+  OdometryReading odometry;
 };
 
 struct FrameBuffer {

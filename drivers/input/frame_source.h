@@ -30,6 +30,8 @@ class FrameSource {
   // True when next() stamps capture_ns with the device's own capture time
   // (CLOCK_MONOTONIC); otherwise the capture thread stamps the arrival.
   virtual bool driver_timestamps() const { return false; }
+  // Whether its frames carry the vehicle's motion (FrameInfo::has_motion).
+  virtual bool has_odometry() const { return false; }
   virtual Status start() = 0;
   // Waits at most timeout_ns. Never allocates for a device source.
   virtual SourceResult next(FrameBuffer* dst, int64_t timeout_ns) = 0;

@@ -20,6 +20,7 @@
 #include <memory>
 #include <vector>
 
+#include "runtime/base/angles.h"
 #include "runtime/cli/args.h"
 #include "runtime/cli/commands.h"
 #include "runtime/cli/eval_inputs.h"
@@ -29,7 +30,9 @@
 #include "runtime/engine/engine.h"
 #include "runtime/engine/pose_decode.h"
 #include "runtime/loop/estimator.h"
+#include "runtime/pose/odometry_filter.h"
 #include "runtime/pose/pose_gate.h"
+#include "runtime/pose/pose_geometry.h"
 
 namespace aprt::cli {
 namespace {
@@ -101,12 +104,16 @@ int cmd_eval(int argc, char** argv) {
         "  --limit N     at most N frames\n"
         "  --rate HZ     the sequence's frame rate for the validity gate's clock\n"
         "                (default 25, the demo drive's); recorded: its times.txt\n"
-        "  --config FILE the validity gate's parameters (sanity.track, max_jump_m) from\n"
-        "                a configuration (default: the built-in defaults)\n"
+        "  --config FILE the validity gate's parameters (sanity.track, max_jump_m) and\n"
+        "                the pose filter's (sanity.filter: needs DIR/odometry.txt) from a\n"
+        "                configuration (default: the built-in defaults)\n"
         "  --threads N   --isa NAME   as for aprt bench\n"
         "A pose is valid when neither the model (non-finite, out of the map, degenerate\n"
         "quaternion) nor the validity gate (jump, uncertain, inconsistent with the\n"
-        "motion, unconfirmed) flagged it: what aprt run publishes as valid.\n");
+        "motion, unconfirmed) flagged it: what aprt run publishes as valid. With\n"
+        "sanity.filter enabled the published pose is the filter's (the model's estimates\n"
+        "and the vehicle's odometry): 'published' gives its errors on every frame, the\n"
+        "valid poses and the confidence are its.\n");
     return 0;
   }
   const char* model_path = args.value("--model");
@@ -158,6 +165,19 @@ int cmd_eval(int argc, char** argv) {
   std::unique_ptr<EvalInputs> inputs = open_eval_inputs(data, e);
   if (!inputs) return 2;
   const ModelMeta& m = e.meta();
+  const bool filtered = gate_config.sanity.filter.enabled;
+  if (filtered && !inputs->has_odometry()) {
+    std::fprintf(stderr,
+                 "aprt eval: %s enables sanity.filter, but %s has no odometry.txt (the "
+                 "vehicle's speed and yaw rate: python3 -m aprt_tools odometry %s writes one "
+                 "for a synthetic drive)\n",
+                 config_path, data, data);
+    return 2;
+  }
+  const std::vector<Config::Camera> cameras = camera_list(gate_config);
+  OdometryFilter filter(
+      odometry_filter_params(gate_config, m),
+      RigidTransform::from_xyz_rpy(cameras[0].sensor_xyz, cameras[0].sensor_rpy_deg).isometry());
   FILE* csv = nullptr;
   if (csv_path) {
     csv = std::fopen(csv_path, "w");
@@ -168,7 +188,8 @@ int cmd_eval(int argc, char** argv) {
     std::fprintf(csv,
                  "name,x,y,z,qw,qx,qy,qz,gt_x,gt_y,gt_z,gt_qw,gt_qx,gt_qy,gt_qz,"
                  "position_error_m,orientation_error_deg,flags,sigma_x_m,sigma_y_m,"
-                 "sigma_yaw_deg\n");
+                 "sigma_yaw_deg,published_x,published_y,published_yaw_deg,"
+                 "published_position_error_m,published_orientation_error_deg\n");
   }
   std::vector<size_t> frames;
   for (size_t i = size_t(start); i < inputs->size(); i += size_t(every)) {
@@ -195,6 +216,7 @@ int cmd_eval(int argc, char** argv) {
   const size_t n = frames.size();
   std::vector<EvalSample> samples;
   size_t bad_frames = 0, flagged = 0;
+  OdometryReading previous;  // the frame evaluated before's (the filter's motion is from it)
   for (const size_t i : frames) {
     EvalFrame f;
     const char* why = "";
@@ -214,11 +236,25 @@ int cmd_eval(int argc, char** argv) {
     smp.t_s = recorded ? inputs->time_s(i) - t0 : double(i) / rate;
     smp.position_error_m = pe;
     smp.orientation_error_deg = oe;
-    const uint32_t all_flags = gate.apply(p, smp.t_s, p.flags);
+    uint32_t all_flags = 0;
+    PoseEstimate out = p;  // what goes out
+    if (filtered) {
+      const OdometryReading reading = inputs->odometry(i);
+      PlanarMotion motion;
+      const bool moved = motion_between(previous, reading, &motion);
+      previous = reading;
+      const FilteredPose fp = filter.step(p, p.flags, moved ? &motion : nullptr);
+      out = fp.sensor;
+      all_flags = fp.flags;
+    } else {
+      all_flags = gate.apply(p, smp.t_s, p.flags);
+    }
+    smp.published_position_error_m = distance(out.position, f.position);
+    smp.published_orientation_error_deg = quat_angle_deg(out.orientation, f.orientation);
     smp.valid = all_flags == 0;
-    smp.has_sigma = p.has_sigma;
-    if (p.has_sigma) {
-      coverage_of(p, f.position, f.orientation, &smp.inside_position, &smp.inside_yaw);
+    smp.has_sigma = out.has_sigma;
+    if (out.has_sigma) {
+      coverage_of(out, f.position, f.orientation, &smp.inside_position, &smp.inside_yaw);
     }
     samples.push_back(smp);
     if (cmp.engine) {
@@ -241,15 +277,17 @@ int cmd_eval(int argc, char** argv) {
       std::fprintf(
           csv,
           "%s,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%u,"
-          "%.4f,%.4f,%.4f\n",
+          "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
           f.name, p.position[0], p.position[1], p.position[2], p.orientation[0], p.orientation[1],
           p.orientation[2], p.orientation[3], f.position[0], f.position[1], f.position[2],
           f.orientation[0], f.orientation[1], f.orientation[2], f.orientation[3], pe, oe, all_flags,
-          p.sigma_position_m[0], p.sigma_position_m[1], p.sigma_rotation_rad[2] * 180.0 / M_PI);
+          p.sigma_position_m[0], p.sigma_position_m[1], p.sigma_rotation_rad[2] * 180.0 / M_PI,
+          out.position[0], out.position[1], quaternion_yaw(out.orientation) * 180.0 / M_PI,
+          smp.published_position_error_m, smp.published_orientation_error_deg);
     }
   }
   if (csv) std::fclose(csv);
-  const EvalSummary sum = summarise(samples, flagged);
+  const EvalSummary sum = summarise(samples, flagged, filtered);
   const Stats cps = stats(cmp.pos_err), cos = stats(cmp.rot_err);
   const Stats dps = stats(cmp.pos_dev), dos = stats(cmp.rot_dev);
   if (json) {

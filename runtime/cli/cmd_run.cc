@@ -3,6 +3,8 @@
 // The service. With no option it runs the embedded default: the shipped
 // model on the shipped demo drive (config/default.yaml), printing every pose
 // with its error against the ground truth, and exits at the end.
+#include <unistd.h>
+
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -223,6 +225,22 @@ int cmd_run(int argc, char** argv) {
     const std::string kept = companion.source.replay.path;
     adjust(companion.source);
     if (!replay) companion.source.replay.path = kept;
+  }
+  if (replay && cfg.sanity.filter.enabled) {
+    // The configuration's filter was chosen for its own drive; a sequence
+    // given on the command line without odometry (an MCAP recording, a
+    // folder without odometry.txt) runs with the validity gate alone, and
+    // says so.
+    const std::string r(replay);
+    const bool has_odometry =
+        cfg.source.type == SourceType::kReplay && access((r + "/odometry.txt").c_str(), F_OK) == 0;
+    if (!has_odometry) {
+      cfg.sanity.filter.enabled = false;
+      std::fprintf(stderr,
+                   "aprt run: %s has no odometry (odometry.txt): the pose filter "
+                   "(sanity.filter) is off for this run, the validity gate decides\n",
+                   replay);
+    }
   }
   if (threads > 0) cfg.engine.threads = int(threads);
   if (quiet) cfg.output.console = false;

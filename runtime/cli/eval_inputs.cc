@@ -37,6 +37,8 @@ class CameraInputs final : public EvalInputs {
   double time_s(size_t i) const override {
     return replay_->has_times() ? replay_->entry(i).time_s : -1.0;
   }
+  bool has_odometry() const override { return replay_->has_odometry(); }
+  OdometryReading odometry(size_t i) const override { return replay_->reading(i); }
   bool fill(size_t i, Engine& e, EvalFrame* f, const char** why) override {
     if (Status s = replay_->read(i, &frame_, i, 0); !s) {
       *why = keep_reason(s.error());

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "drivers/input/odometry.h"
 #include "runtime/engine/engine.h"
 
 namespace aprt::cli {
@@ -25,6 +26,10 @@ class EvalInputs {
   // Frame i's recorded time (times.txt, seconds), or -1 when the sequence has
   // none (LiDAR sequences never do).
   virtual double time_s(size_t) const { return -1.0; }
+  // Frame i's odometry reading (the sequence's odometry.txt); invalid
+  // without one or where it does not cover the frame.
+  virtual bool has_odometry() const { return false; }
+  virtual OdometryReading odometry(size_t) const { return {}; }
 
  protected:
   const char* keep_reason(const Error& e) {  // the message outlives the Error

@@ -23,7 +23,9 @@ ErrorStats error_stats(std::vector<double> v);
 // One frame as eval saw it.
 struct EvalSample {
   double t_s = 0;  // the sequence's clock (frame index / rate)
-  double position_error_m = 0, orientation_error_deg = 0;
+  double position_error_m = 0, orientation_error_deg = 0;  // the model's estimate
+  // The pose that goes out: the pose filter's where it runs, else the estimate.
+  double published_position_error_m = 0, published_orientation_error_deg = 0;
   bool valid = false;  // no flag at all: what `aprt run` would publish as valid
   bool has_sigma = false;
   bool inside_position = false, inside_yaw = false;  // within the published 95 % regions
@@ -31,14 +33,17 @@ struct EvalSample {
 
 struct EvalSummary {
   size_t frames = 0, flagged_by_model = 0;
-  ErrorStats position, orientation;              // every frame
-  ErrorStats valid_position, valid_orientation;  // the valid ones
+  ErrorStats position, orientation;                      // the model's, every frame
+  bool filtered = false;                                 // the pose filter ran (sanity.filter)
+  ErrorStats published_position, published_orientation;  // what goes out, every frame
+  ErrorStats valid_position, valid_orientation;          // what goes out valid
   size_t valid = 0, valid_over_10m = 0, valid_over_10deg = 0;
   double first_valid_s = -1;  // after the first frame; -1: none
   size_t with_sigma = 0, inside_position = 0, inside_yaw = 0;
 };
 
-EvalSummary summarise(const std::vector<EvalSample>& samples, size_t flagged_by_model);
+EvalSummary summarise(const std::vector<EvalSample>& samples, size_t flagged_by_model,
+                      bool filtered = false);
 
 // Whether the truth lies within the pose's published 95 % regions: the
 // horizontal ellipse (chi^2 with 2 degrees of freedom) and the yaw interval.

@@ -350,7 +350,8 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(r.boolean(sv, "supervisor", "systemd", &c.supervisor.systemd));
 
     const Node* sa = root->get("sanity");
-    APRT_TRY(r.map(sa, "sanity", {"bounds_margin", "max_jump_m", "max_speed_mps", "track"}));
+    APRT_TRY(
+        r.map(sa, "sanity", {"bounds_margin", "max_jump_m", "max_speed_mps", "track", "filter"}));
     APRT_TRY(r.num(sa, "sanity", "bounds_margin", 0, 10, &c.sanity.bounds_margin));
     APRT_TRY(r.num(sa, "sanity", "max_jump_m", 0, 1e6, &c.sanity.max_jump_m));
     APRT_TRY(r.num(sa, "sanity", "max_speed_mps", 0, 1000, &c.sanity.max_speed_mps));
@@ -368,6 +369,24 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(r.num(tr, tp, "gate_growth_mps", 0, 1000, &t.gate_growth_mps));
     APRT_TRY(r.integer(tr, tp, "confirm", 1, 1000, &t.confirm));
     APRT_TRY(r.integer(tr, tp, "lost_after", 1, 100000, &t.lost_after));
+    const Node* fl = sa ? sa->get("filter") : nullptr;
+    const char* fp = "sanity.filter";
+    Config::Sanity::Filter& f = c.sanity.filter;
+    APRT_TRY(r.map(fl, fp,
+                   {"enabled", "distance_noise", "yaw_noise_deg_per_m", "yaw_rate_noise_dps",
+                    "gate_chi2", "confirm", "take_over_after", "max_radius_m", "max_yaw_deg",
+                    "lost_radius_m", "position_sigma_scale"}));
+    APRT_TRY(r.boolean(fl, fp, "enabled", &f.enabled));
+    APRT_TRY(r.num(fl, fp, "distance_noise", 0, 1, &f.distance_noise));
+    APRT_TRY(r.num(fl, fp, "yaw_noise_deg_per_m", 0, 90, &f.yaw_noise_deg_per_m));
+    APRT_TRY(r.num(fl, fp, "yaw_rate_noise_dps", 0, 90, &f.yaw_rate_noise_dps));
+    APRT_TRY(r.num(fl, fp, "gate_chi2", 0.1, 1000, &f.gate_chi2));
+    APRT_TRY(r.integer(fl, fp, "confirm", 1, 1000, &f.confirm));
+    APRT_TRY(r.integer(fl, fp, "take_over_after", 1, 100000, &f.take_over_after));
+    APRT_TRY(r.num(fl, fp, "max_radius_m", 0.01, 1e4, &f.max_radius_m));
+    APRT_TRY(r.num(fl, fp, "max_yaw_deg", 0.01, 180, &f.max_yaw_deg));
+    APRT_TRY(r.num(fl, fp, "lost_radius_m", 0.1, 1e6, &f.lost_radius_m));
+    APRT_TRY(r.num(fl, fp, "position_sigma_scale", 0.01, 100, &f.position_sigma_scale));
 
     const Node* th = root->get("threads");
     APRT_TRY(r.map(th, "threads",
@@ -396,6 +415,24 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
   if (c.source.replay_source() && c.source.replay.path.empty()) {
     return Error(Errc::kInvalidArgument, "%s: source.replay.path is required for a %s source",
                  origin.c_str(), source_type_name(c.source.type));
+  }
+  if (c.sanity.filter.enabled) {
+    // Only a camera replay with odometry.txt carries the vehicle's motion in
+    // this version; anywhere else every pose would go out flagged.
+    const Config::Source& trigger = c.cameras.empty() ? c.source : c.cameras[0].source;
+    if (trigger.type != SourceType::kReplay) {
+      return Error(Errc::kInvalidArgument,
+                   "%s: sanity.filter needs the vehicle's odometry, which only a replay source "
+                   "with odometry.txt supplies in this version (source.type is %s; no bus "
+                   "odometry input yet): disable the filter for this source",
+                   origin.c_str(), source_type_name(trigger.type));
+    }
+    if (!c.fusion.companion.empty()) {
+      return Error(Errc::kInvalidArgument,
+                   "%s: sanity.filter with fusion.companion: the filter takes one sensor's "
+                   "estimates; disable one of them",
+                   origin.c_str());
+    }
   }
   for (const Config::Camera& cam : c.cameras) {
     if (cam.source.lidar_source()) {

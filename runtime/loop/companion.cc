@@ -113,7 +113,7 @@ void Companion::poll() noexcept {
   const FrameBuffer* frames[1] = {f};
   uint32_t flags = estimator_->infer(*engine_, frames, false, &rec) | stale;
   rec.inference_end_ns = monotonic_ns();
-  flags = estimator_->check(rec, flags);
+  flags = estimator_->check(&rec, flags);
   latest_ = sensor_estimate(rec, flags, sigma_pos_m_, sigma_rot_rad_);
   latest_capture_ns_ = rec.capture_ns;
   latest_gate_s_ = estimator_->last_gate_s();

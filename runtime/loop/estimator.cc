@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "runtime/base/clock.h"
+#include "runtime/loop/companion.h"
 
 namespace aprt {
 
@@ -19,6 +20,9 @@ Estimator::Estimator(const Config& config, CaptureChannel* const* channels, size
   fusion_.max_orientation_spread_rad = config.fusion.max_orientation_spread_deg * M_PI / 180.0;
   fusion_.min_agreeing = config.fusion.min_agreeing;
   gate_ = PoseGate(pose_gate_params(config));
+  filtered_ = config.sanity.filter.enabled;
+  filter_ = OdometryFilter(odometry_filter_params(config, ModelMeta{}),
+                           n > 0 ? channels[0]->base_from_sensor : Eigen::Isometry3d::Identity());
 }
 
 uint32_t Estimator::start(const FrameBuffer& f, PoseRecord* rec) const noexcept {
@@ -27,6 +31,7 @@ uint32_t Estimator::start(const FrameBuffer& f, PoseRecord* rec) const noexcept 
   rec->source_stamp_ns = f.info.source_stamp_ns;
   rec->frame_sequence = f.info.sequence;
   rec->source = f.info.source;
+  rec->odometry = f.info.odometry;
   return rec->inference_start_ns - f.info.capture_ns > stale_ns_ ? kPoseStaleFrame : 0;
 }
 
@@ -43,6 +48,26 @@ PoseGateParams pose_gate_params(const Config& config) {
   p.max_speed_mps = config.sanity.max_speed_mps;
   p.confirm = t.confirm;
   p.lost_after = t.lost_after;
+  return p;
+}
+
+OdometryFilterParams odometry_filter_params(const Config& config, const ModelMeta& meta) {
+  const Config::Sanity::Filter& f = config.sanity.filter;
+  OdometryFilterParams p;
+  p.filter.enabled = f.enabled;
+  p.filter.distance_noise = f.distance_noise;
+  p.filter.yaw_noise_deg_per_m = f.yaw_noise_deg_per_m;
+  p.filter.yaw_rate_noise_dps = f.yaw_rate_noise_dps;
+  p.filter.gate_chi2 = f.gate_chi2;
+  p.filter.confirm = f.confirm;
+  p.filter.take_over_after = f.take_over_after;
+  p.filter.max_radius_m = f.max_radius_m;
+  p.filter.max_yaw_deg = f.max_yaw_deg;
+  p.filter.lost_radius_m = f.lost_radius_m;
+  p.filter.position_sigma_scale = f.position_sigma_scale;
+  p.usable_radius_m = config.sanity.track.max_radius_m;
+  p.usable_yaw_deg = config.sanity.track.max_yaw_deg;
+  fallback_sigma(config, meta, &p.fallback_sigma_m, &p.fallback_sigma_rad);
   return p;
 }
 
@@ -132,17 +157,28 @@ uint32_t Estimator::infer(Engine& engine, const FrameBuffer* const* frames, bool
   return flags;
 }
 
-uint32_t Estimator::check(const PoseRecord& rec, uint32_t flags) noexcept {
-  flags |= rec.pose.flags;
-  if (rec.inference_end_ns - rec.inference_start_ns > deadline_ns_) {
+uint32_t Estimator::check(PoseRecord* rec, uint32_t flags) noexcept {
+  flags |= rec->pose.flags;
+  if (rec->inference_end_ns - rec->inference_start_ns > deadline_ns_) {
     flags |= kPoseDeadlineMissed;
     ++deadline_misses_;
   }
   // A frame that came late or stale says nothing against the track's motion;
   // everything else the pose itself or the fusion flagged is not used by it.
   const uint32_t own = flags & ~(kPoseStaleFrame | kPoseDeadlineMissed);
-  last_gate_s_ = clock_.seconds(rec.capture_ns, rec.source_stamp_ns);
-  return flags | gate_.check(rec.pose, last_gate_s_, own);
+  last_gate_s_ = clock_.seconds(rec->capture_ns, rec->source_stamp_ns);
+  if (!filtered_) return flags | gate_.check(rec->pose, last_gate_s_, own);
+  // The filter's pose goes out instead of the estimate: valid by its own
+  // covariance, whatever this frame's estimate was; a late or stale frame
+  // still withholds it.
+  PlanarMotion motion;
+  const bool moved = motion_between(last_odometry_, rec->odometry, &motion);
+  last_odometry_ = rec->odometry;
+  const FilteredPose fp = filter_.step(rec->pose, flags, moved ? &motion : nullptr);
+  rec->pose = fp.sensor;
+  for (int k = 0; k < 3; ++k) rec->base_position[k] = fp.base_position[k];
+  for (int k = 0; k < 4; ++k) rec->base_orientation[k] = fp.base_orientation[k];
+  return (flags & (kPoseStaleFrame | kPoseDeadlineMissed)) | fp.flags;
 }
 
 }  // namespace aprt

@@ -16,6 +16,7 @@
 #include "runtime/engine/engine.h"
 #include "runtime/loop/capture.h"
 #include "runtime/loop/pose_record.h"
+#include "runtime/pose/odometry_filter.h"
 #include "runtime/pose/pose_fusion.h"
 #include "runtime/pose/pose_gate.h"
 
@@ -29,6 +30,9 @@ struct ScanNote {
 
 // The validity gate's parameters from the configuration (sanity.track).
 PoseGateParams pose_gate_params(const Config& config);
+// The pose filter's (sanity.filter; its measurements chosen by sanity.track's
+// limits; the fallback sigma of a model without confidence outputs).
+OdometryFilterParams odometry_filter_params(const Config& config, const ModelMeta& meta);
 
 class Estimator {
  public:
@@ -57,7 +61,9 @@ class Estimator {
   // validity gate (the model's confidence, the agreement with the motion:
   // runtime/pose/pose_gate.h); the history advances only with a pose that
   // passed. Returns all flags.
-  uint32_t check(const PoseRecord& rec, uint32_t flags) noexcept;
+  // With sanity.filter the pose filter runs instead of the gate and rec's
+  // pose becomes the filter's (runtime/pose/odometry_filter.h).
+  uint32_t check(PoseRecord* rec, uint32_t flags) noexcept;
 
   const ScanNote& last_scan() const { return scan_; }
   // The validity gate, and the time (its clock) of the last estimate it checked.
@@ -78,6 +84,9 @@ class Estimator {
   int64_t deadline_ns_;
   FusionParams fusion_;
   PoseGate gate_;
+  bool filtered_ = false;
+  OdometryReading last_odometry_;  // the frame before's (the filter's motion is from it)
+  OdometryFilter filter_{OdometryFilterParams{}, Eigen::Isometry3d::Identity()};
   GateClock clock_;  // the frames' own stamps where they have them
   double last_gate_s_ = 0;
   ScanNote scan_;

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 
+#include "drivers/input/odometry.h"
 #include "runtime/engine/pose_decode.h"
 #include "runtime/pose/pose_flags.h"
 
@@ -52,6 +53,9 @@ struct PoseRecord {
   double truth_position[3] = {};
   double truth_orientation[4] = {1, 0, 0, 0};
   char name[128] = {};
+  // The frame's odometry reading (a source that knows it): the pose filter
+  // (sanity.filter) carries its pose between frames with it.
+  OdometryReading odometry;
   FusionSummary fusion;
   CompanionNote companion;
 };

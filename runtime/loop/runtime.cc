@@ -51,6 +51,12 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config, const C
     r->channel_ptrs_.push_back(ch.value().get());
     r->channels_.push_back(std::move(ch.value()));
   }
+  if (c.sanity.filter.enabled && !r->channels_[0]->source->has_odometry()) {
+    return Error(Errc::kInvalidArgument,
+                 "run: sanity.filter needs the vehicle's odometry, and %s has no odometry.txt "
+                 "(python3 -m aprt_tools odometry FOLDER writes one for a synthetic drive)",
+                 c.source.replay.path.c_str());
+  }
   r->estimator_.reset(new (std::nothrow)
                           Estimator(c, r->channel_ptrs_.data(), r->channel_ptrs_.size()));
   if (companion) {
@@ -204,7 +210,7 @@ void Runtime::inference_loop() {
     }
     rec.inference_end_ns = monotonic_ns();
     if (save_index_ >= 0 && uint64_t(save_index_) == index) write_saved_frame(*f, rec, *e);
-    flags = est.check(rec, flags);
+    flags = est.check(&rec, flags);
     if (companion_) flags = fuse_companion(&rec, flags);
     shared_.deadline_misses.store(est.deadline_misses(), std::memory_order_relaxed);
     rec.flags = flags;

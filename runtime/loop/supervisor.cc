@@ -101,8 +101,10 @@ RunState Supervisor::step(const Health& health) noexcept {
     const char* why = "ok";
     if (h.last_flags & kPoseJump) {
       why = "ok; pose withheld: an implausible jump from the last pose";
+    } else if (h.last_flags & kPoseNoOdometry) {
+      why = "ok; pose withheld: no vehicle motion for the pose filter (odometry)";
     } else if (h.last_flags & kPoseUncertain) {
-      why = "ok; pose withheld: the model is not confident enough";
+      why = "ok; pose withheld: the model (or the pose filter) is not confident enough";
     } else if (h.last_flags & kPoseInconsistent) {
       why = "ok; pose withheld: it disagrees with the vehicle's motion";
     } else if (h.last_flags & kPoseUnconfirmed) {

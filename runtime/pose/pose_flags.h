@@ -14,6 +14,7 @@ inline constexpr uint32_t kPoseDeadlineMissed = 1u << 9;  // inference over its 
 inline constexpr uint32_t kPoseJump = 1u << 10;           // implausible jump from the last pose
 inline constexpr uint32_t kPoseNoQuorum = 1u << 11;       // cameras disagree: no majority (fusion)
 inline constexpr uint32_t kPoseSparseScan = 1u << 12;     // LiDAR: too few points (padded or empty)
+inline constexpr uint32_t kPoseNoOdometry = 1u << 13;     // the pose filter has no vehicle motion
 // The validity gate's (runtime/pose/pose_gate.h): the pose is withheld, the
 // system is fine.
 // Bits 5..7 (free in the network output's range; CAN's 16-bit Flags keeps
@@ -26,7 +27,7 @@ inline constexpr uint32_t kPoseUnconfirmed = 1u << 7;   // no confirmed track ye
 inline constexpr const char* kPoseFlagNames[16] = {
     "non-finite",   "quat-degenerate", "quat-norm", "out-of-bounds", "no-confidence", "uncertain",
     "inconsistent", "unconfirmed",     "stale",     "late",          "jump",          "no-quorum",
-    "sparse",       nullptr,           nullptr,     nullptr};
+    "sparse",       "no-odometry",     nullptr,     nullptr};
 
 // "ok" or the names of the flags set, comma-separated, into `buf`.
 inline const char* pose_flag_names(uint32_t flags, char* buf, int size) noexcept {

@@ -10,6 +10,13 @@ constexpr double kZ95 = 1.959963984540054;
 
 }  // namespace
 
+bool confident(const PoseEstimate& e, double max_radius_m, double max_yaw_deg) noexcept {
+  if (!e.has_sigma) return true;
+  const double r = kChi2Sqrt95 * std::fmax(e.sigma_position_m[0], e.sigma_position_m[1]);
+  const double yaw_interval = kZ95 * e.sigma_rotation_rad[2] * 180.0 / kPiRad;
+  return r <= max_radius_m && yaw_interval <= max_yaw_deg;
+}
+
 void PoseGate::Track::add(double tn, double xn, double yn, double yawn) noexcept {
   // Yaw unwrapped against the newest: the least-squares line sees no 2 pi steps.
   if (size > 0) yawn = last_yaw() + wrap_angle(yawn - last_yaw());
@@ -121,13 +128,9 @@ uint32_t PoseGate::gate(const PoseEstimate& e, double t, uint32_t flags) noexcep
   uint32_t out = jump(e, t, flags);
   if (!p_.enabled) return out;
   bool usable = (flags | out) == 0;
-  if (e.has_sigma) {
-    const double r = kChi2Sqrt95 * std::fmax(e.sigma_position_m[0], e.sigma_position_m[1]);
-    const double yaw_interval = kZ95 * e.sigma_rotation_rad[2] * 180.0 / kPiRad;
-    if (!(r <= p_.max_position_radius_m) || !(yaw_interval <= p_.max_yaw_interval_deg)) {
-      out |= kPoseUncertain;
-      usable = false;
-    }
+  if (!confident(e, p_.max_position_radius_m, p_.max_yaw_interval_deg)) {
+    out |= kPoseUncertain;
+    usable = false;
   }
   const double x = e.position[0], y = e.position[1], yaw = quaternion_yaw(e.orientation);
   if (!usable) {

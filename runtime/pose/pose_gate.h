@@ -42,6 +42,12 @@ struct PoseGateParams {
   int lost_after = 25;                 // rejections in a row that end it
 };
 
+// Whether the model's own 95 % regions for the estimate (its horizontal
+// radius, its yaw half-interval) are within the limits: what makes an
+// estimate usable at all (the gate's kPoseUncertain; the pose filter's
+// measurements). An estimate without confidence outputs passes. @rt.
+bool confident(const PoseEstimate& e, double max_radius_m, double max_yaw_deg) noexcept;
+
 // The gate's clock in the loop. The motion gate compares poses against the
 // time between their frames. A frame's own stamp (a PointCloud2 header, a
 // recorded drive's stamp) is that time as the sensor saw it; arrival

@@ -300,6 +300,29 @@ cameras:
                  "cameras.roof: a LiDAR source (pointcloud2) is one sensor");
 }
 
+TEST(Config, PoseFilter) {
+  auto c = parse_config(
+      "model: m\nsource: {replay: {path: d}}\nsanity:\n  filter: {enabled: true, "
+      "distance_noise: 0.1, max_radius_m: 10, confirm: 3, position_sigma_scale: 0.6}\n",
+      "test.yaml");
+  ASSERT_TRUE(c) << c.error().message();
+  EXPECT_TRUE(c->sanity.filter.enabled);
+  EXPECT_EQ(c->sanity.filter.distance_noise, 0.1);
+  EXPECT_EQ(c->sanity.filter.max_radius_m, 10.0);
+  EXPECT_EQ(c->sanity.filter.confirm, 3);
+  EXPECT_EQ(c->sanity.filter.position_sigma_scale, 0.6);
+  EXPECT_FALSE(parse_config("model: m\nsource: {replay: {path: d}}\n", "t")->sanity.filter.enabled);
+  // Only a replay carries odometry in this version: elsewhere it is refused by name.
+  expect_refused("model: m\nsource: {type: v4l2}\nsanity: {filter: {enabled: true}}\n",
+                 "sanity.filter needs the vehicle's odometry");
+  expect_refused(
+      "model: m\nsource: {replay: {path: d}}\nfusion: {companion: c.yaml}\n"
+      "sanity: {filter: {enabled: true}}\n",
+      "sanity.filter with fusion.companion");
+  expect_refused("model: m\nsource: {replay: {path: d}}\nsanity: {filter: {gate_chi2: 0}}\n",
+                 "sanity.filter.gate_chi2");
+}
+
 TEST(Config, ShippedConfigurationsParse) {
   for (const char* name : {"config/default.yaml", "config/aprt.yaml"}) {
     auto c = load_config(std::string(APRT_SOURCE_DIR) + "/" + name);
@@ -310,6 +333,8 @@ TEST(Config, ShippedConfigurationsParse) {
   EXPECT_TRUE(ecu->output.can.enabled);
   EXPECT_TRUE(ecu->output.dds.enabled);
   EXPECT_EQ(ecu->model[0], '/');  // the service's working directory is not the data folder
+  auto demo = load_config(std::string(APRT_SOURCE_DIR) + "/config/default.yaml");
+  EXPECT_TRUE(demo->sanity.filter.enabled);  // the demo drive has odometry.txt
 }
 
 TEST(Config, RefusesWithKeyPathAndLine) {

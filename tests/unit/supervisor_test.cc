@@ -69,7 +69,9 @@ TEST(Supervisor, WithheldPosesKeepRunningAndSayWhy) {
     const char* reason;
   } cases[] = {
       {kPoseJump, "ok; pose withheld: an implausible jump from the last pose"},
-      {kPoseUncertain, "ok; pose withheld: the model is not confident enough"},
+      {kPoseUncertain, "ok; pose withheld: the model (or the pose filter) is not confident enough"},
+      {kPoseNoOdometry | kPoseUnconfirmed,
+       "ok; pose withheld: no vehicle motion for the pose filter (odometry)"},
       {kPoseInconsistent, "ok; pose withheld: it disagrees with the vehicle's motion"},
       {kPoseUnconfirmed, "ok; pose withheld: no confirmed track yet"},
       {0, "ok"},

@@ -223,6 +223,29 @@ def cmd_drive_times(a):
           f"(mean {len(t) / max(t[-1], 1e-9):.1f} frames/s)")
 
 
+def cmd_odometry(a):
+    from .odometry import write_odometry
+
+    camera = None
+    if a.camera_xy:
+        try:
+            camera = tuple(float(v) for v in a.camera_xy.split(","))
+            assert len(camera) == 2
+        except (ValueError, AssertionError):
+            print(f"odometry: --camera-xy wants X,Y in metres, not {a.camera_xy!r}",
+                  file=sys.stderr)
+            sys.exit(2)
+    try:
+        path, s = write_odometry(a.folder, a.out, speed_scale=a.speed_scale,
+                                 speed_noise=a.speed_noise, yaw_rate_bias_dps=a.yaw_rate_bias,
+                                 yaw_rate_noise_dps=a.yaw_rate_noise, seed=a.seed, camera=camera)
+    except (OSError, ValueError) as e:
+        print(f"odometry: {a.folder}: {e}", file=sys.stderr)
+        sys.exit(2)
+    print(f"odometry: {path}: {len(s)} samples over {s[-1, 0] - s[0, 0]:.1f} s, "
+          f"{float(abs(s[:-1, 1] * (s[1:, 0] - s[:-1, 0])).sum()):.0f} m")
+
+
 def cmd_plot_eval(a):
     from .plot_eval import EvalCsvError, plot_eval
 
@@ -392,6 +415,23 @@ def main(argv=None):
                     help="m/s^2 of acceleration and braking between them (default 2)")
     dt.add_argument("--out", help="where to write (default FOLDER/times.txt)")
     dt.set_defaults(fn=cmd_drive_times)
+
+    od = sub.add_parser("odometry", help="odometry.txt for a sequence: the speed and yaw rate its "
+                                         "vehicle's bus would carry, with their errors")
+    od.add_argument("folder", help="a DeepLoc-layout sequence (poses.txt; times.txt if any)")
+    od.add_argument("--speed-scale", type=float, default=0.01,
+                    help="speed scale error, drawn once in +-this (default 0.01: 1 %%)")
+    od.add_argument("--speed-noise", type=float, default=0.05,
+                    help="white noise on each speed sample, m/s (default 0.05)")
+    od.add_argument("--yaw-rate-bias", type=float, default=0.2,
+                    help="gyro bias, drawn once in +-this, deg/s (default 0.2)")
+    od.add_argument("--yaw-rate-noise", type=float, default=0.5,
+                    help="white noise on each yaw rate sample, deg/s (default 0.5)")
+    od.add_argument("--camera-xy", help="the camera on base_link, X,Y metres (default: "
+                                        "dataset.json's camera_to_base_link, else 0,0)")
+    od.add_argument("--seed", type=int, default=1)
+    od.add_argument("--out", help="where to write (default FOLDER/odometry.txt)")
+    od.set_defaults(fn=cmd_odometry)
 
     pe = sub.add_parser("plot-eval", help="trajectory and error plot from `aprt eval --csv` files")
     pe.add_argument("csv", nargs="+", help="one or more CSV files (side by side)")

@@ -6,6 +6,9 @@
 #   train_jitter_{day,overcast,morning,noon}  four more such routes (seeds 5, 6, 8, 9)
 #       whose every frame is a perturbed view: +-1.5 m across the lane, camera
 #       +-0.3 m in height, +-3 deg in pitch, +-10 deg in yaw        (~28 600 frames)
+#   train_route{26,27,28,29}_{day,overcast,morning,noon}  four more routes, every
+#       frame a milder perturbed view (+-1 m, +-0.2 m, +-2 deg, +-6 deg): added for
+#       the fourth continued run (docs/evaluation.md)
 #   val_haze   a separate 600 m drive under a light no training drive has (validation)
 #   val_route12_morning  a second validation drive: route seed 12, morning light
 #   val_route13_dusk     a third: route seed 13, dusk light
@@ -33,6 +36,11 @@ render train_jitter_day      --split train --route-seed 5 --lighting day --view-
 render train_jitter_overcast --split train --route-seed 6 --lighting overcast --view-jitter $jitter
 render train_jitter_morning  --split train --route-seed 8 --lighting morning --view-jitter $jitter
 render train_jitter_noon     --split train --route-seed 9 --lighting noon --view-jitter $jitter
+mild=1.0,0.2,2,6
+render train_route26_day      --split train --route-seed 26 --lighting day --view-jitter $mild
+render train_route27_overcast --split train --route-seed 27 --lighting overcast --view-jitter $mild
+render train_route28_morning  --split train --route-seed 28 --lighting morning --view-jitter $mild
+render train_route29_noon     --split train --route-seed 29 --lighting noon --view-jitter $mild
 render val_haze   --split test --route-seed 11 --lighting haze --max-length 600
 render val_route12_morning --split test --route-seed 12 --lighting morning --max-length 600
 render val_route13_dusk --split test --route-seed 13 --lighting dusk --max-length 600

@@ -17,6 +17,39 @@ namespace {
 constexpr size_t kMaxReplayFileBytes = size_t(64) << 20;  // the largest frame file probed
 }  // namespace
 
+double DeeplocReplay::recording_time_s(size_t i) const {
+  return has_times_ ? entries_[i].time_s : double(i) * kDefaultFramePeriodS;
+}
+
+// Each frame's reading: the motion from the frame before composed onto its
+// reading; where the odometry does not cover a step, a new epoch from zero.
+void DeeplocReplay::integrate(const OdometrySeries& od) {
+  readings_.assign(entries_.size(), OdometryReading{});
+  uint32_t epoch = 0;
+  for (size_t i = 0; i < entries_.size(); ++i) {
+    OdometryReading& r = readings_[i];
+    const double t = recording_time_s(i);
+    PlanarMotion m;
+    if (i > 0 && readings_[i - 1].valid && od.motion(recording_time_s(i - 1), t, &m)) {
+      const OdometryReading& p = readings_[i - 1];
+      r = p;
+      r.x += std::cos(p.yaw) * m.dx - std::sin(p.yaw) * m.dy;
+      r.y += std::sin(p.yaw) * m.dx + std::cos(p.yaw) * m.dy;
+      r.yaw += m.dyaw;
+      r.distance_m += m.distance_m;
+    } else if (od.motion(t, t, &m)) {
+      if (i > 0) ++epoch;
+      r = OdometryReading{};
+      r.valid = true;
+      r.epoch = epoch;
+    } else {
+      r = OdometryReading{};  // not covered
+    }
+    r.t_s = t;
+  }
+  epochs_ = epoch + 1;
+}
+
 Expected<std::unique_ptr<DeeplocReplay>> DeeplocReplay::open(const char* folder) {
   std::unique_ptr<DeeplocReplay> r(new (std::nothrow) DeeplocReplay());
   APRT_ENSURE(r != nullptr, Errc::kOutOfMemory, "replay: out of memory");
@@ -35,6 +68,13 @@ Expected<std::unique_ptr<DeeplocReplay>> DeeplocReplay::open(const char* folder)
     }
     if (Status st = parse_times(text, path, &r->entries_); !st) return st.error();
     r->has_times_ = true;
+  }
+  // Optional odometry: absent is fine, present must be right.
+  std::snprintf(path, sizeof path, "%s/odometry.txt", folder);
+  if (access(path, F_OK) == 0) {
+    auto od = OdometrySeries::load(path);
+    if (!od) return od.error();
+    r->integrate(od.value());
   }
   auto dec = ImageDecoder::create(kMaxReplayFileBytes);
   if (!dec) return dec.error();
@@ -82,6 +122,7 @@ Status DeeplocReplay::read(size_t i, FrameBuffer* dst, uint64_t sequence, int64_
   for (int k = 0; k < 3; ++k) f.truth_position[k] = e.position[k];
   for (int k = 0; k < 4; ++k) f.truth_orientation[k] = e.orientation[k];
   std::snprintf(f.name, sizeof f.name, "%s", e.name);
+  f.odometry = reading(i);
   return ok();
 }
 

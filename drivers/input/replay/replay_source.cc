@@ -37,6 +37,12 @@ SourceResult ReplaySource::next(FrameBuffer* dst, int64_t timeout_ns) {
     return SourceResult::kSkipped;
   }
   dst->info.sequence = pacer_.delivered();
+  // A loop's restart begins new odometry epochs: no motion across it.
+  if (have_previous_ && i < previous_) ++loops_;
+  previous_ = i;
+  have_previous_ = true;
+  dst->info.odometry = replay_->reading(i);
+  dst->info.odometry.epoch += loops_ * replay_->epochs();
   return SourceResult::kFrame;
 }
 

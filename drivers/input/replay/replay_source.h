@@ -1,7 +1,8 @@
 // A DeepLoc-layout sequence as a frame source, paced like a camera: at a
 // fixed rate, at the recorded rate (times.txt), or as fast as frames are
 // taken (rate 0: the next frame is decoded only once the consumer took the
-// previous one, so a demo loses no frame). Optionally loops.
+// previous one, so a demo loses no frame). Optionally loops. With the
+// sequence's odometry.txt each frame carries its odometry reading.
 #pragma once
 
 #include <atomic>
@@ -20,6 +21,7 @@ class ReplaySource final : public FrameSource {
 
   const char* name() const override { return "replay"; }
   size_t max_frame_bytes() const override { return replay_->frame_bytes(); }
+  bool has_odometry() const override { return replay_->has_odometry(); }
   Status start() override;
   SourceResult next(FrameBuffer* dst, int64_t timeout_ns) override;
   void stop() override {}
@@ -35,6 +37,9 @@ class ReplaySource final : public FrameSource {
   std::unique_ptr<DeeplocReplay> replay_;
   ReplayPacer pacer_;
   Error error_;
+  size_t previous_ = 0;  // the index of the frame delivered last
+  bool have_previous_ = false;
+  uint32_t loops_ = 0;
 };
 
 }  // namespace aprt

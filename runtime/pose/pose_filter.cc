@@ -1,0 +1,167 @@
+#include "runtime/pose/pose_filter.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "runtime/base/angles.h"
+#include "runtime/pose/pose_flags.h"
+
+namespace aprt {
+namespace {
+
+constexpr double kChi2Sqrt95 = 2.447746830680816;  // sqrt(chi^2_2(0.95)): the 95 % ellipse
+constexpr double kZ95 = 1.959963984540054;
+
+using Mat3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
+
+double radius95(const double* P) noexcept {
+  const double a = P[0], b = P[1], c = P[4];
+  const double lmax = 0.5 * (a + c) + std::sqrt(0.25 * (a - c) * (a - c) + b * b);
+  return kChi2Sqrt95 * std::sqrt(std::fmax(lmax, 0.0));
+}
+
+}  // namespace
+
+void PoseFilter::reset() noexcept {
+  fix_ = State{};
+  candidate_ = State{};
+  refused_ = 0;
+}
+
+PoseFilter::State PoseFilter::start(const PlanarPose& z) noexcept {
+  State k;
+  k.s[0] = z.x;
+  k.s[1] = z.y;
+  k.s[2] = z.yaw;
+  k.P[0] = z.sigma_x * z.sigma_x;
+  k.P[4] = z.sigma_y * z.sigma_y;
+  k.P[8] = z.sigma_yaw * z.sigma_yaw;
+  k.count = 1;
+  return k;
+}
+
+// x' = x + R(yaw) (dx, dy), yaw' = yaw + dyaw; the covariance through the
+// Jacobian, plus the odometry's own error for the step.
+void PoseFilter::predict(State* k, const PlanarMotion& m) const noexcept {
+  const double c = std::cos(k->s[2]), s = std::sin(k->s[2]);
+  k->s[0] += c * m.dx - s * m.dy;
+  k->s[1] += s * m.dx + c * m.dy;
+  k->s[2] = wrap_angle(k->s[2] + m.dyaw);
+  Mat3 F = Mat3::Identity();
+  F(0, 2) = -s * m.dx - c * m.dy;
+  F(1, 2) = c * m.dx - s * m.dy;
+  Eigen::Map<Mat3> P(k->P);
+  const double sd = p_.distance_noise * m.distance_m;
+  const double sy =
+      (p_.yaw_noise_deg_per_m * m.distance_m + p_.yaw_rate_noise_dps * m.dt_s) * kPiRad / 180.0;
+  Mat3 Q = Mat3::Zero();
+  Q(0, 0) = Q(1, 1) = sd * sd;
+  Q(2, 2) = sy * sy;
+  const Mat3 next = F * P * F.transpose() + Q;
+  P = next;
+}
+
+double PoseFilter::innovation(const State& k, const PlanarPose& z, bool update,
+                              State* out) noexcept {
+  const Eigen::Map<const Mat3> P(k.P);
+  Eigen::Vector3d v(z.x - k.s[0], z.y - k.s[1], wrap_angle(z.yaw - k.s[2]));
+  Mat3 S = P;
+  S(0, 0) += z.sigma_x * z.sigma_x;
+  S(1, 1) += z.sigma_y * z.sigma_y;
+  S(2, 2) += z.sigma_yaw * z.sigma_yaw;
+  const Eigen::LDLT<Mat3> ldlt(S);
+  if (ldlt.info() != Eigen::Success) return INFINITY;
+  const Eigen::Vector3d w = ldlt.solve(v);
+  const double d2 = v.dot(w);
+  if (!update) return std::isfinite(d2) ? d2 : INFINITY;
+  *out = k;
+  // K = P S^-1 (S symmetric): the state moves by P w, the covariance shrinks
+  // by K P; symmetrised against rounding.
+  const Mat3 K = ldlt.solve(P).transpose();
+  const Eigen::Vector3d ds = P * w;
+  out->s[0] += ds[0];
+  out->s[1] += ds[1];
+  out->s[2] = wrap_angle(out->s[2] + ds[2]);
+  Mat3 Pn = P - K * P;
+  Pn = 0.5 * (Pn + Pn.transpose());
+  Eigen::Map<Mat3>(out->P) = Pn;
+  out->count = k.count + 1;
+  return d2;
+}
+
+PoseFilter::Output PoseFilter::output(const State& k, uint32_t flags) const noexcept {
+  Output o;
+  o.fix = true;
+  o.pose.x = k.s[0];
+  o.pose.y = k.s[1];
+  o.pose.yaw = k.s[2];
+  o.pose.sigma_x = std::sqrt(k.P[0]) * p_.position_sigma_scale;
+  o.pose.sigma_y = std::sqrt(k.P[4]) * p_.position_sigma_scale;
+  o.pose.sigma_yaw = std::sqrt(k.P[8]);
+  o.cov_xy = k.P[1] * p_.position_sigma_scale * p_.position_sigma_scale;
+  const double yaw95 = kZ95 * o.pose.sigma_yaw * 180.0 / kPiRad;
+  if (!(radius95(k.P) <= p_.max_radius_m) || !(yaw95 <= p_.max_yaw_deg)) flags |= kPoseUncertain;
+  o.flags = flags;
+  return o;
+}
+
+PoseFilter::Output PoseFilter::step(const PlanarMotion* motion,
+                                    const PlanarPose* estimate) noexcept {
+  if (!motion) {
+    // Without the motion since the last step nothing carries over.
+    reset();
+    Output o;
+    if (estimate) o.pose = *estimate;
+    o.flags = kPoseNoOdometry | kPoseUnconfirmed;
+    return o;
+  }
+  if (fix_.count > 0) predict(&fix_, *motion);
+  if (candidate_.count > 0) predict(&candidate_, *motion);
+  Use use = Use::kNone;
+  if (estimate) {
+    if (fix_.count > 0) {
+      State next;
+      if (innovation(fix_, *estimate, false, nullptr) <= p_.gate_chi2) {
+        (void)innovation(fix_, *estimate, true, &next);
+        fix_ = next;
+        refused_ = 0;
+        candidate_ = State{};
+        use = Use::kAccepted;
+      } else {
+        ++refused_;
+        use = Use::kRefused;
+      }
+    }
+    if (fix_.count == 0 || use == Use::kRefused) {
+      // A run of estimates that agree with each other along the odometry:
+      // the fix to be, or the one that takes over a fix refusing everything.
+      State next;
+      if (candidate_.count > 0 &&
+          innovation(candidate_, *estimate, false, nullptr) <= p_.gate_chi2) {
+        (void)innovation(candidate_, *estimate, true, &next);
+        candidate_ = next;
+      } else {
+        candidate_ = start(*estimate);
+      }
+      if (candidate_.count >= p_.confirm && (fix_.count == 0 || refused_ >= p_.take_over_after)) {
+        use = fix_.count == 0 ? Use::kStarted : Use::kTookOver;
+        fix_ = candidate_;
+        candidate_ = State{};
+        refused_ = 0;
+      }
+    }
+  }
+  if (fix_.count > 0 && radius95(fix_.P) > p_.lost_radius_m) fix_ = State{};
+  Output o;
+  if (fix_.count > 0) {
+    o = output(fix_, 0);
+  } else {
+    if (estimate) o.pose = *estimate;
+    o.flags = kPoseUnconfirmed;
+  }
+  o.use = use;
+  o.refused = refused_;
+  return o;
+}
+
+}  // namespace aprt

@@ -1,0 +1,307 @@
+// The pose filter (runtime/pose/pose_filter.h, odometry_filter.h) and the
+// odometry it runs on (drivers/input/odometry.h), on made-up drives: a fix
+// starts from agreeing estimates and is then closer than they are, outliers
+// are refused without moving it, a wrong start is taken over by a consistent
+// run, a missing motion resets it, a long blind stretch makes it uncertain;
+// the odometry integrates arcs exactly and refuses what it cannot cover.
+#include "runtime/pose/pose_filter.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "drivers/input/odometry.h"
+#include "runtime/base/allocation_counter.h"
+#include "runtime/pose/odometry_filter.h"
+#include "runtime/pose/pose_flags.h"
+
+namespace aprt {
+namespace {
+
+constexpr double kDt = 0.04;      // 25 Hz
+constexpr double kSpeed = 10.0;   // m/s
+constexpr double kYawRate = 0.2;  // rad/s: a 50 m radius circle
+
+// base_link on the circle at time t: starts at (0, 0) heading east.
+PlanarPose on_circle(double t) {
+  const double r = kSpeed / kYawRate, a = kYawRate * t;
+  PlanarPose p;
+  p.x = r * std::sin(a);
+  p.y = r * (1 - std::cos(a));
+  p.yaw = a;
+  return p;
+}
+
+PlanarMotion step_motion() {
+  PlanarMotion m;
+  const double a = kYawRate * kDt, r = kSpeed / kYawRate;
+  m.dx = r * std::sin(a);
+  m.dy = r * (1 - std::cos(a));
+  m.dyaw = a;
+  m.distance_m = kSpeed * kDt;
+  m.dt_s = kDt;
+  return m;
+}
+
+PlanarPose noisy(const PlanarPose& truth, std::mt19937& rng, double sigma_m, double sigma_rad) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  PlanarPose z = truth;
+  z.x += sigma_m * n(rng);
+  z.y += sigma_m * n(rng);
+  z.yaw += sigma_rad * n(rng);
+  z.sigma_x = z.sigma_y = sigma_m;
+  z.sigma_yaw = sigma_rad;
+  return z;
+}
+
+double distance(const PlanarPose& a, const PlanarPose& b) {
+  return std::hypot(a.x - b.x, a.y - b.y);
+}
+
+PoseFilterParams params() {
+  PoseFilterParams p;
+  p.enabled = true;
+  p.confirm = 4;
+  p.take_over_after = 25;
+  p.max_radius_m = 8.0;
+  p.max_yaw_deg = 5.0;
+  return p;
+}
+
+TEST(PoseFilter, StartsFromAgreeingEstimatesThenBeatsThem) {
+  PoseFilter f(params());
+  std::mt19937 rng(7);
+  const PlanarMotion m = step_motion();
+  double sum_filter = 0, sum_estimate = 0;
+  int n = 0;
+  for (int k = 0; k < 500; ++k) {
+    const PlanarPose truth = on_circle(k * kDt);
+    const PlanarPose z = noisy(truth, rng, 3.0, 0.03);
+    const PoseFilter::Output o = f.step(&m, &z);
+    if (k < 3) {
+      EXPECT_FALSE(o.fix) << k;
+      EXPECT_EQ(o.flags & kPoseUnconfirmed, kPoseUnconfirmed);
+    }
+    if (k == 3) {
+      EXPECT_EQ(o.use, PoseFilter::Use::kStarted);
+    }
+    if (k >= 100) {
+      EXPECT_EQ(o.flags, 0u) << k;
+      sum_filter += distance(o.pose, truth);
+      sum_estimate += distance(z, truth);
+      ++n;
+    }
+  }
+  // Many frames averaged along an exact odometry: several times closer.
+  EXPECT_LT(sum_filter / n, 0.3 * sum_estimate / n);
+}
+
+TEST(PoseFilter, OutliersAreRefusedAndDoNotMoveTheFix) {
+  PoseFilter f(params());
+  std::mt19937 rng(3);
+  const PlanarMotion m = step_motion();
+  for (int k = 0; k < 100; ++k) {
+    const PlanarPose z = noisy(on_circle(k * kDt), rng, 2.0, 0.02);
+    (void)f.step(&m, &z);
+  }
+  for (int k = 100; k < 110; ++k) {
+    const PlanarPose truth = on_circle(k * kDt);
+    PlanarPose wrong = noisy(truth, rng, 2.0, 0.02);
+    wrong.x += 60.0;  // the wrong street, confidently
+    wrong.yaw += M_PI;
+    const PoseFilter::Output o = f.step(&m, &wrong);
+    EXPECT_EQ(o.use, PoseFilter::Use::kRefused) << k;
+    EXPECT_EQ(o.flags, 0u) << k;  // the fix carries on with the odometry
+    EXPECT_LT(distance(o.pose, truth), 2.0) << k;
+  }
+}
+
+TEST(PoseFilter, AWrongStartIsTakenOverByAConsistentRun) {
+  PoseFilterParams p = params();
+  p.take_over_after = 10;
+  PoseFilter f(p);
+  std::mt19937 rng(5);
+  const PlanarMotion m = step_motion();
+  // Four agreeing but wrong estimates start a fix 80 m away...
+  for (int k = 0; k < 4; ++k) {
+    PlanarPose z = noisy(on_circle(k * kDt), rng, 0.0, 0.0);
+    z.y += 80.0;
+    z.sigma_x = z.sigma_y = 1.0;
+    z.sigma_yaw = 0.01;
+    (void)f.step(&m, &z);
+  }
+  ASSERT_TRUE(f.has_fix());
+  // ...then the right ones: refused until 10 in a row, then they take over.
+  bool took_over = false;
+  for (int k = 4; k < 40; ++k) {
+    const PlanarPose truth = on_circle(k * kDt);
+    const PlanarPose z = noisy(truth, rng, 1.0, 0.01);
+    const PoseFilter::Output o = f.step(&m, &z);
+    if (o.use == PoseFilter::Use::kTookOver) {
+      took_over = true;
+      EXPECT_GE(k, 4 + 9);
+    }
+    if (k >= 20) {
+      EXPECT_LT(distance(o.pose, truth), 3.0) << k;
+    }
+  }
+  EXPECT_TRUE(took_over);
+}
+
+TEST(PoseFilter, WithoutMotionNothingCarriesOver) {
+  PoseFilter f(params());
+  std::mt19937 rng(1);
+  const PlanarMotion m = step_motion();
+  for (int k = 0; k < 50; ++k) {
+    const PlanarPose z = noisy(on_circle(k * kDt), rng, 1.0, 0.01);
+    (void)f.step(&m, &z);
+  }
+  ASSERT_TRUE(f.has_fix());
+  const PlanarPose z = noisy(on_circle(50 * kDt), rng, 1.0, 0.01);
+  const PoseFilter::Output o = f.step(nullptr, &z);
+  EXPECT_EQ(o.flags, kPoseNoOdometry | kPoseUnconfirmed);
+  EXPECT_FALSE(f.has_fix());
+}
+
+TEST(PoseFilter, ABlindStretchBecomesUncertainThenLost) {
+  PoseFilterParams p = params();
+  p.lost_radius_m = 30.0;
+  PoseFilter f(p);
+  std::mt19937 rng(2);
+  const PlanarMotion m = step_motion();
+  for (int k = 0; k < 50; ++k) {
+    const PlanarPose z = noisy(on_circle(k * kDt), rng, 1.0, 0.01);
+    (void)f.step(&m, &z);
+  }
+  bool uncertain = false;
+  for (int k = 50; k < 5000 && f.has_fix(); ++k) {
+    const PoseFilter::Output o = f.step(&m, nullptr);  // no usable estimate
+    uncertain = uncertain || (o.flags & kPoseUncertain);
+  }
+  EXPECT_TRUE(uncertain);
+  EXPECT_FALSE(f.has_fix());
+}
+
+TEST(PoseFilter, StepAllocatesNothing) {
+  PoseFilter f(params());
+  std::mt19937 rng(4);
+  const PlanarMotion m = step_motion();
+  std::vector<PlanarPose> zs;
+  for (int k = 0; k < 200; ++k) zs.push_back(noisy(on_circle(k * kDt), rng, 2.0, 0.02));
+  OdometryFilterParams op;
+  op.filter = params();
+  OdometryFilter of(op, Eigen::Isometry3d::Identity());
+  PoseEstimate e;
+  e.has_sigma = true;
+  e.sigma_position_m[0] = e.sigma_position_m[1] = e.sigma_position_m[2] = 2.0;
+  e.sigma_rotation_rad[0] = e.sigma_rotation_rad[1] = e.sigma_rotation_rad[2] = 0.02;
+  const AllocationScope scope;
+  for (const PlanarPose& z : zs) {
+    (void)f.step(&m, &z);
+    e.position[0] = z.x;
+    e.position[1] = z.y;
+    e.orientation[0] = std::cos(z.yaw / 2);
+    e.orientation[3] = std::sin(z.yaw / 2);
+    (void)of.step(e, 0, &m);
+  }
+  EXPECT_EQ(scope.count(), 0u);
+}
+
+// The camera 1.2 m ahead of base_link, perfect estimates of it: the filter's
+// published camera pose follows the truth through the turn (the lever arm
+// turns with the vehicle).
+TEST(OdometryFilter, TracksASensorAheadOfBaseLink) {
+  OdometryFilterParams p;
+  p.filter = params();
+  Eigen::Isometry3d base_from_sensor = Eigen::Isometry3d::Identity();
+  base_from_sensor.translation() = Eigen::Vector3d(1.2, 0, 1.5);
+  OdometryFilter f(p, base_from_sensor);
+  const PlanarMotion m = step_motion();
+  for (int k = 0; k < 200; ++k) {
+    const PlanarPose b = on_circle(k * kDt);
+    PoseEstimate cam;
+    cam.position[0] = b.x + 1.2 * std::cos(b.yaw);
+    cam.position[1] = b.y + 1.2 * std::sin(b.yaw);
+    cam.position[2] = 1.5;
+    cam.orientation[0] = std::cos(b.yaw / 2);
+    cam.orientation[3] = std::sin(b.yaw / 2);
+    cam.has_sigma = true;
+    cam.sigma_position_m[0] = cam.sigma_position_m[1] = cam.sigma_position_m[2] = 1.0;
+    cam.sigma_rotation_rad[0] = cam.sigma_rotation_rad[1] = cam.sigma_rotation_rad[2] = 0.01;
+    const FilteredPose o = f.step(cam, 0, &m);
+    if (k < 3) {
+      EXPECT_NE(o.flags, 0u);
+    }
+    if (k >= 10) {
+      EXPECT_EQ(o.flags, 0u) << k;
+      EXPECT_NEAR(o.sensor.position[0], cam.position[0], 1e-6) << k;
+      EXPECT_NEAR(o.sensor.position[1], cam.position[1], 1e-6) << k;
+      EXPECT_NEAR(o.sensor.position[2], 1.5, 1e-9);
+      EXPECT_NEAR(o.base_position[0], b.x, 1e-6) << k;
+    }
+  }
+}
+
+TEST(OdometryFilter, AFlaggedOrUnconfidentEstimateIsNoMeasurement) {
+  OdometryFilterParams p;
+  p.filter = params();
+  p.usable_radius_m = 10.0;
+  OdometryFilter f(p, Eigen::Isometry3d::Identity());
+  const PlanarMotion m = step_motion();
+  PoseEstimate e;
+  e.has_sigma = true;
+  e.sigma_position_m[0] = e.sigma_position_m[1] = 20.0;  // 95 % radius ~49 m > 10
+  e.sigma_rotation_rad[2] = 0.01;
+  for (int k = 0; k < 10; ++k) EXPECT_NE(f.step(e, 0, &m).flags & kPoseUnconfirmed, 0u);
+  e.sigma_position_m[0] = e.sigma_position_m[1] = 1.0;
+  for (int k = 0; k < 10; ++k) EXPECT_NE(f.step(e, kPoseStaleFrame, &m).flags, 0u);
+}
+
+// --- odometry ----------------------------------------------------------------
+
+TEST(Odometry, IntegratesAnArcExactly) {
+  std::vector<OdometrySample> s;
+  for (int k = 0; k <= 100; ++k) s.push_back({k * kDt, kSpeed, kYawRate});
+  auto series = OdometrySeries::from_samples(s, "test");
+  ASSERT_TRUE(series);
+  PlanarMotion m;
+  // From 0.5 s to 2.5 s, across sample boundaries at odd places.
+  ASSERT_TRUE(series->motion(0.51, 2.53, &m));
+  const double a = kYawRate * 2.02, r = kSpeed / kYawRate;
+  EXPECT_NEAR(m.dx, r * std::sin(a), 1e-9);
+  EXPECT_NEAR(m.dy, r * (1 - std::cos(a)), 1e-9);
+  EXPECT_NEAR(m.dyaw, a, 1e-12);
+  EXPECT_NEAR(m.distance_m, kSpeed * 2.02, 1e-9);
+}
+
+TEST(Odometry, RefusesWhatItDoesNotCover) {
+  std::vector<OdometrySample> s = {{0.0, 5, 0}, {0.1, 5, 0}, {2.0, 5, 0}};
+  auto series = OdometrySeries::from_samples(s, "test");
+  ASSERT_TRUE(series);
+  PlanarMotion m;
+  EXPECT_FALSE(series->motion(-0.1, 0.05, &m));  // before the first sample
+  EXPECT_TRUE(series->motion(0.0, 0.5, &m));     // held for 0.5 s: still fine
+  EXPECT_FALSE(series->motion(0.0, 1.0, &m));    // silent for 0.9 s
+  EXPECT_FALSE(series->motion(2.0, 3.0, &m));    // past the last sample
+  EXPECT_FALSE(series->motion(1.0, 0.5, &m));    // backwards
+}
+
+TEST(Odometry, ParseErrorsNameTheLine) {
+  auto ok = OdometrySeries::parse("# seconds speed yaw_rate\n0 1 0\n0.04 1 0.01\n", "o.txt");
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->size(), 2u);
+  const char* bad[] = {"0 1\n", "0 1 0\n0 1 0\n", "0 1 nan\n", "0 400 0\n", "0 1 90\n", "", "#\n"};
+  const char* why[] = {"expected", "not after",  "finite",    "metres per second",
+                       "radians",  "no samples", "no samples"};
+  for (int i = 0; i < 7; ++i) {
+    auto r = OdometrySeries::parse(bad[i], "o.txt");
+    ASSERT_FALSE(r) << bad[i];
+    EXPECT_NE(std::string(r.error().message()).find(why[i]), std::string::npos)
+        << r.error().message();
+  }
+}
+
+}  // namespace
+}  // namespace aprt
