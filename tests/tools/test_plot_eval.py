@@ -52,6 +52,23 @@ class PlotEval(unittest.TestCase):
         with self.assertRaisesRegex(EvalCsvError, "no frames"):
             read_eval_csv(self.path("empty.csv"))
 
+    def test_the_published_pose(self):
+        with open(self.path("f.csv"), "w") as f:
+            f.write(HEADER.strip() + ",published_x,published_y,published_yaw_deg,"
+                    "published_position_error_m,published_orientation_error_deg\n")
+            for i in range(20):
+                f.write(f"images/{i:06d}.png,{10 + i + 3},5,1.5,1,0,0,0,{10 + i},5,1.5,1,0,0,0,"
+                        f"3,1,0,{10 + i + 0.5},5,0,0.5,0.2\n")
+        d = read_eval_csv(self.path("f.csv"), published=True)
+        self.assertAlmostEqual(float(d["position_error_m"][0]), 0.5)
+        self.assertAlmostEqual(float(d["x"][0]), 10.5)
+        self.assertAlmostEqual(float(read_eval_csv(self.path("f.csv"))["x"][0]), 13.0)
+        plot_eval([self.path("f.csv")], self.path("p.png"), published=True)
+        self.assertTrue(os.path.getsize(self.path("p.png")) > 1000)
+        write_csv(self.path("old.csv"))
+        with self.assertRaisesRegex(EvalCsvError, "no published_"):
+            read_eval_csv(self.path("old.csv"), published=True)
+
     def test_label_count_must_match(self):
         write_csv(self.path("a.csv"))
         with self.assertRaisesRegex(EvalCsvError, "labels"):

@@ -251,7 +251,7 @@ def cmd_plot_eval(a):
 
     try:
         plot_eval(a.csv, a.out, labels=a.labels.split(",") if a.labels else None, title=a.title,
-                  dataset=a.dataset)
+                  dataset=a.dataset, published=a.published)
     except (EvalCsvError, OSError) as e:
         print(f"plot-eval: {e}", file=sys.stderr)
         sys.exit(2)
@@ -439,6 +439,9 @@ def main(argv=None):
     pe.add_argument("--labels", help="comma-separated panel titles (default: file names)")
     pe.add_argument("--title")
     pe.add_argument("--dataset", help="a synthetic drive's dataset.json: draw the town's streets")
+    pe.add_argument("--published", action="store_true",
+                    help="draw the pose that went out (the pose filter's, where eval ran it) "
+                         "instead of the model's estimate")
     pe.set_defaults(fn=cmd_plot_eval)
 
     pt = sub.add_parser("plot-timing", help="latency histogram and time series of `aprt run --timing`")

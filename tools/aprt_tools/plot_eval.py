@@ -8,6 +8,9 @@ orientation error below; the headline gives the medians, the share of frames
 more than 10 m off, and how many went out valid. With --dataset (a synthetic
 drive's dataset.json) the town's streets are drawn beneath. Several CSVs (fp32
 and int8, two models, two drives) are drawn side by side with their labels.
+With --published the pose that went out is drawn instead of the model's
+estimate: the pose filter's where `aprt eval` ran it (sanity.filter; the
+CSV's published_* columns).
 
   python3 -m aprt_tools plot-eval run.csv [int8.csv ...] --out plot.png [--labels fp32,int8]
                                   [--dataset DRIVE/dataset.json]
@@ -25,9 +28,13 @@ class EvalCsvError(ValueError):
 
 
 REQUIRED = ("x", "y", "gt_x", "gt_y", "position_error_m", "orientation_error_deg")
+# --published: the pose that went out, under the names the plot uses.
+PUBLISHED = {"x": "published_x", "y": "published_y",
+             "position_error_m": "published_position_error_m",
+             "orientation_error_deg": "published_orientation_error_deg"}
 
 
-def read_eval_csv(path: str) -> dict:
+def read_eval_csv(path: str, published: bool = False) -> dict:
     with open(path, newline="") as f:
         rows = list(csv.DictReader(f))
     if not rows:
@@ -36,10 +43,14 @@ def read_eval_csv(path: str) -> dict:
     if missing:
         raise EvalCsvError(f"{path}: missing column(s) {', '.join(missing)} "
                            "(expected the header written by `aprt eval --csv`)")
+    if published and PUBLISHED["x"] not in rows[0]:
+        raise EvalCsvError(f"{path}: no published_* columns (written by `aprt eval --csv` of "
+                           "this version)")
     out = {}
     for k in REQUIRED + (("flags",) if "flags" in rows[0] else ()):
+        column = PUBLISHED.get(k, k) if published else k
         try:
-            out[k] = np.array([float(r[k]) for r in rows])
+            out[k] = np.array([float(r[column]) for r in rows])
         except ValueError as e:
             raise EvalCsvError(f"{path}: column {k}: {e}") from None
     return out
@@ -73,7 +84,7 @@ def town_streets(dataset: str):
 
 
 def plot_eval(paths: list, out: str, labels: list | None = None, title: str | None = None,
-              dataset: str | None = None) -> None:
+              dataset: str | None = None, published: bool = False) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -82,7 +93,7 @@ def plot_eval(paths: list, out: str, labels: list | None = None, title: str | No
     labels = labels or [p.rsplit("/", 1)[-1].rsplit(".", 1)[0] for p in paths]
     if len(labels) != len(paths):
         raise EvalCsvError(f"{len(labels)} labels for {len(paths)} CSV files")
-    runs = [read_eval_csv(p) for p in paths]
+    runs = [read_eval_csv(p, published) for p in paths]
     streets = town_streets(dataset) if dataset else None
     # One colour scale for every panel: they compare. It saturates at the
     # largest p90 so a few outliers do not wash it out.
@@ -101,12 +112,13 @@ def plot_eval(paths: list, out: str, labels: list | None = None, title: str | No
                         zorder=0)
         ax.plot(d["gt_x"], d["gt_y"], color="0.2", lw=1.2, label="ground truth", zorder=1)
         valid = d["flags"] == 0 if "flags" in d else np.ones(len(d["x"]), bool)
+        what = "published" if published else "predicted"
         sc = ax.scatter(d["x"][valid], d["y"][valid], c=d["position_error_m"][valid], s=7,
-                        cmap="plasma", vmin=0, vmax=vmax, label="predicted (valid)", zorder=2)
+                        cmap="plasma", vmin=0, vmax=vmax, label=f"{what} (valid)", zorder=2)
         if not valid.all():
             ax.scatter(d["x"][~valid], d["y"][~valid], c=d["position_error_m"][~valid], s=14,
                        cmap="plasma", vmin=0, vmax=vmax, marker="x", lw=0.8,
-                       label="predicted (withheld)", zorder=2)
+                       label=f"{what} (withheld)", zorder=2)
         ax.plot(d["gt_x"][0], d["gt_y"][0], marker="o", color="tab:green", ms=8, zorder=3,
                 label="start")
         k = min(len(d["gt_x"]) - 1, 8)
