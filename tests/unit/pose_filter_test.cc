@@ -60,6 +60,15 @@ double distance(const PlanarPose& a, const PlanarPose& b) {
   return std::hypot(a.x - b.x, a.y - b.y);
 }
 
+// Frames [from, to) of the circle with estimates of the given noise.
+void drive(PoseFilter* f, std::mt19937* rng, int from, int to, double sigma_m, double sigma_rad) {
+  const PlanarMotion m = step_motion();
+  for (int k = from; k < to; ++k) {
+    const PlanarPose z = noisy(on_circle(k * kDt), *rng, sigma_m, sigma_rad);
+    (void)f->step(&m, &z);
+  }
+}
+
 PoseFilterParams params() {
   PoseFilterParams p;
   p.enabled = true;
@@ -102,10 +111,7 @@ TEST(PoseFilter, OutliersAreRefusedAndDoNotMoveTheFix) {
   PoseFilter f(params());
   std::mt19937 rng(3);
   const PlanarMotion m = step_motion();
-  for (int k = 0; k < 100; ++k) {
-    const PlanarPose z = noisy(on_circle(k * kDt), rng, 2.0, 0.02);
-    (void)f.step(&m, &z);
-  }
+  drive(&f, &rng, 0, 100, 2.0, 0.02);
   for (int k = 100; k < 110; ++k) {
     const PlanarPose truth = on_circle(k * kDt);
     PlanarPose wrong = noisy(truth, rng, 2.0, 0.02);
@@ -153,11 +159,7 @@ TEST(PoseFilter, AWrongStartIsTakenOverByAConsistentRun) {
 TEST(PoseFilter, WithoutMotionNothingCarriesOver) {
   PoseFilter f(params());
   std::mt19937 rng(1);
-  const PlanarMotion m = step_motion();
-  for (int k = 0; k < 50; ++k) {
-    const PlanarPose z = noisy(on_circle(k * kDt), rng, 1.0, 0.01);
-    (void)f.step(&m, &z);
-  }
+  drive(&f, &rng, 0, 50, 1.0, 0.01);
   ASSERT_TRUE(f.has_fix());
   const PlanarPose z = noisy(on_circle(50 * kDt), rng, 1.0, 0.01);
   const PoseFilter::Output o = f.step(nullptr, &z);
@@ -171,10 +173,7 @@ TEST(PoseFilter, ABlindStretchBecomesUncertainThenLost) {
   PoseFilter f(p);
   std::mt19937 rng(2);
   const PlanarMotion m = step_motion();
-  for (int k = 0; k < 50; ++k) {
-    const PlanarPose z = noisy(on_circle(k * kDt), rng, 1.0, 0.01);
-    (void)f.step(&m, &z);
-  }
+  drive(&f, &rng, 0, 50, 1.0, 0.01);
   bool uncertain = false;
   for (int k = 50; k < 5000 && f.has_fix(); ++k) {
     const PoseFilter::Output o = f.step(&m, nullptr);  // no usable estimate
