@@ -176,6 +176,17 @@ uint32_t Estimator::check(PoseRecord* rec, uint32_t flags) noexcept {
   last_odometry_ = rec->odometry;
   const FilteredPose fp = filter_.step(rec->pose, flags, moved ? &motion : nullptr);
   rec->pose = fp.sensor;
+  FilterNote& note = rec->filter;
+  note.configured = true;
+  note.fix = fp.fix;
+  note.use = uint8_t(fp.use);
+  note.refused = uint16_t(fp.refused < 65535 ? fp.refused : 65535);
+  // The published regions (the filter's sigmas as they go out).
+  note.radius95_m =
+      fp.fix
+          ? float(2.4477 * std::fmax(fp.sensor.sigma_position_m[0], fp.sensor.sigma_position_m[1]))
+          : -1.0f;
+  note.yaw95_deg = fp.fix ? float(1.96 * fp.sensor.sigma_rotation_rad[2] * 180.0 / M_PI) : -1.0f;
   for (int k = 0; k < 3; ++k) rec->base_position[k] = fp.base_position[k];
   for (int k = 0; k < 4; ++k) rec->base_orientation[k] = fp.base_orientation[k];
   return (flags & (kPoseStaleFrame | kPoseDeadlineMissed)) | fp.flags;

@@ -7,6 +7,7 @@
 
 #include "drivers/output/dds/dds_publisher.h"
 #include "runtime/loop/recorder.h"
+#include "runtime/pose/pose_filter.h"
 #include "runtime/pose/pose_flags.h"
 #include "runtime/pose/sensor_fusion.h"
 
@@ -222,9 +223,9 @@ void PoseOutputs::publish_status(const StatusSnapshot& s, int64_t realtime_ns) n
       "frames_skipped", "inference_ms", "can",   "can_estimates", "can_dropped", "can_problem"};
   // Multi-camera runs add "fusion" and one "camera NAME" per camera; LiDAR runs
   // "lidar"; runs with a second sensor "companion".
-  constexpr int kMax = kCount + 4 + 8;
+  constexpr int kMax = kCount + 6 + 8;
   const char* keys[kMax];
-  char v[kMax][48];
+  char v[kMax][96];
   for (int i = 0; i < kCount; ++i) keys[i] = kKeys[i];
   std::snprintf(v[kState], sizeof v[0], "%s", run_state_name(s.state));
   std::snprintf(v[kReason], sizeof v[0], "%s", s.reason);
@@ -284,6 +285,22 @@ void PoseOutputs::publish_status(const StatusSnapshot& s, int64_t realtime_ns) n
                     double(cn.yaw_diff_deg), double(cn.age_ms));
       keys[count] = "companion_flags";
       pose_flag_names(cn.flags, v[count++], int(sizeof v[0]));
+    }
+  }
+  if (s.filter && s.filter->configured && count < kMax) {
+    // "fix, 95 % 2.1 m 1.4 deg; estimate taken" / "no fix; estimate refused (3 in a row)"
+    const FilterNote& fn = *s.filter;
+    keys[count] = "filter";
+    char regions[32] = "no fix";
+    if (fn.fix) {
+      std::snprintf(regions, sizeof regions, "fix, 95 %% %.1f m %.1f deg", double(fn.radius95_m),
+                    double(fn.yaw95_deg));
+    }
+    std::snprintf(v[count++], sizeof v[0], "%s; %s", regions,
+                  PoseFilter::use_name(PoseFilter::Use(fn.use)));
+    if (fn.refused > 1 && count < kMax) {
+      keys[count] = "filter_refused";
+      std::snprintf(v[count++], sizeof v[0], "%u in a row", unsigned(fn.refused));
     }
   }
   const char* values[kMax];

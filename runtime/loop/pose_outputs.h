@@ -50,6 +50,7 @@ struct StatusSnapshot {
   double last_inference_ms = 0;
   const FusionSummary* fusion = nullptr;     // the last cycle's (multi-camera runs)
   const CompanionNote* companion = nullptr;  // the last cycle's (fusion.companion runs)
+  const FilterNote* filter = nullptr;        // the last cycle's (sanity.filter runs)
   // LiDAR runs: the last scan's points (after a points model's crop), what the
   // point gate dropped and clipped in it, and the sparse scans so far.
   bool lidar = false;

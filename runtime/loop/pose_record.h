@@ -33,6 +33,16 @@ struct CompanionNote {
   float age_ms = -1;  // how much older the companion's frame is than this cycle's (-1: none)
 };
 
+// The pose filter's part in a pose (sanity.filter runs only).
+struct FilterNote {
+  bool configured = false;
+  bool fix = false;
+  uint8_t use = 0;        // PoseFilter::Use: what this frame's estimate did
+  uint16_t refused = 0;   // estimates refused in a row
+  float radius95_m = -1;  // the filter's 95 % horizontal radius (-1: no fix)
+  float yaw95_deg = -1;   // and yaw half-interval
+};
+
 struct PoseRecord {
   uint64_t index = 0;           // n-th pose of this run
   uint64_t frame_sequence = 0;  // source frame counter
@@ -58,6 +68,7 @@ struct PoseRecord {
   OdometryReading odometry;
   FusionSummary fusion;
   CompanionNote companion;
+  FilterNote filter;
 };
 
 }  // namespace aprt

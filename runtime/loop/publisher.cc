@@ -40,7 +40,8 @@ Publisher::Publisher(const Config& config, PoseRing& ring, PoseOutputs& outputs,
       rot_errors_(capacity) {}
 
 void Publisher::publish_status(double last_inference_ms, const FusionSummary& last_fusion,
-                               const CompanionNote& last_companion) noexcept {
+                               const CompanionNote& last_companion,
+                               const FilterNote& last_filter) noexcept {
   StatusSnapshot st;
   st.state = shared_.run_state();
   st.reason = shared_.reason.load(std::memory_order_acquire);
@@ -52,6 +53,7 @@ void Publisher::publish_status(double last_inference_ms, const FusionSummary& la
   st.last_inference_ms = last_inference_ms;
   st.fusion = &last_fusion;
   st.companion = &last_companion;
+  st.filter = &last_filter;
   if (scans_) {
     st.lidar = true;
     st.scan_points = shared_.scan_points.load(std::memory_order_relaxed);
@@ -80,11 +82,12 @@ void Publisher::run() noexcept {
   double last_inference_ms = 0;
   FusionSummary last_fusion;
   CompanionNote last_companion;
+  FilterNote last_filter;
   for (;;) {
     shared_.publish_beat.store(monotonic_ns(), std::memory_order_release);
     if (monotonic_ns() >= next_status) {
       next_status += status_period;
-      publish_status(last_inference_ms, last_fusion, last_companion);
+      publish_status(last_inference_ms, last_fusion, last_companion, last_filter);
     }
     print_state_lines();
     if (!ring_.pop(&r)) {
@@ -107,6 +110,7 @@ void Publisher::run() noexcept {
     last_inference_ms = double(r.inference_end_ns - r.inference_start_ns) * 1e-6;
     last_fusion = r.fusion;
     last_companion = r.companion;
+    last_filter = r.filter;
     if (timing_count_ < timings_.size()) {
       timings_[timing_count_++] = {r.capture_ns, r.inference_start_ns, r.inference_end_ns, now,
                                    r.flags};

@@ -50,7 +50,7 @@ class Publisher {
  private:
   void print_pose(const PoseRecord& r) const;
   void publish_status(double last_inference_ms, const FusionSummary& last_fusion,
-                      const CompanionNote& last_companion) noexcept;
+                      const CompanionNote& last_companion, const FilterNote& last_filter) noexcept;
 
   const Config& config_;
   PoseRing& ring_;

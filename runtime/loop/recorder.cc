@@ -44,13 +44,13 @@ struct Recorder::Rings {
   SpscRing<RecordedPose, 256> poses;
 
   struct Status {
-    static constexpr int kMax = 24;
+    static constexpr int kMax = 28;
     int64_t stamp_ns = 0;
     uint8_t level = 0;
     int count = 0;
     char message[128] = {};
     char keys[kMax][32] = {};
-    char values[kMax][48] = {};
+    char values[kMax][96] = {};  // the longest reason fits
   };
   SpscRing<Status, 16> statuses;
   Status status_in, status_out;  // the publisher's and the writer's copy (no 2 KiB on a stack)

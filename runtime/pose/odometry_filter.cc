@@ -50,6 +50,7 @@ FilteredPose OdometryFilter::step(const PoseEstimate& sensor, uint32_t flags,
   FilteredPose out;
   out.use = o.use;
   out.refused = o.refused;
+  out.fix = o.fix && have_attitude_;
   if (!o.fix || !have_attitude_) {
     // No fix yet: the estimate as it is, never valid.
     out.sensor = sensor;

@@ -25,6 +25,7 @@ struct FilteredPose {
   double base_position[3] = {};
   double base_orientation[4] = {1, 0, 0, 0};  // w x y z
   uint32_t flags = 0;  // the filter's (0: valid) | the estimate's before a fix
+  bool fix = false;    // the filter has a pose (else: the estimate)
   PoseFilter::Use use = PoseFilter::Use::kNone;
   int refused = 0;
 };

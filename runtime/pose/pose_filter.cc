@@ -22,6 +22,17 @@ double radius95(const double* P) noexcept {
 
 }  // namespace
 
+const char* PoseFilter::use_name(Use u) {
+  switch (u) {
+    case Use::kNone: return "no usable estimate";
+    case Use::kAccepted: return "estimate taken";
+    case Use::kRefused: return "estimate refused";
+    case Use::kStarted: return "started";
+    case Use::kTookOver: return "taken over";
+  }
+  return "?";
+}
+
 void PoseFilter::reset() noexcept {
   fix_ = State{};
   candidate_ = State{};

@@ -81,6 +81,7 @@ class PoseFilter {
   void reset() noexcept;
 
   bool has_fix() const { return fix_.count > 0; }
+  static const char* use_name(Use u);
 
  private:
   struct State {
