@@ -3,8 +3,8 @@
 #include "drivers/dds/dds_module.h"
 
 extern "C" __attribute__((visibility("default"))) const aprt::DdsModuleApi* aprt_dds_module() {
-  static const aprt::DdsModuleApi api{aprt::DdsModuleApi::kAbi, aprt::create_cyclone_publisher,
-                                      aprt::create_cyclone_listener,
-                                      aprt::create_cyclone_pointcloud2_reader};
+  static const aprt::DdsModuleApi api{
+      aprt::DdsModuleApi::kAbi, aprt::create_cyclone_publisher, aprt::create_cyclone_listener,
+      aprt::create_cyclone_pointcloud2_reader, aprt::create_cyclone_twist_reader};
   return &api;
 }

@@ -14,21 +14,25 @@
 
 namespace aprt {
 
-// drivers/output/dds/dds_publisher.h, dds_listener.h and
-// drivers/input/pointcloud2/pointcloud2_reader.h.
+// drivers/output/dds/dds_publisher.h, dds_listener.h,
+// drivers/input/pointcloud2/pointcloud2_reader.h and
+// drivers/input/twist/twist_reader.h.
 class DdsPublisher;
 class DdsListener;
 class PointCloud2Reader;
+class TwistReader;
 struct DdsOptions;
 struct PointCloud2Options;
+struct TwistOptions;
 
 struct DdsModuleApi {
-  static constexpr uint32_t kAbi = 1;  // bumped with any change to this struct or the classes
+  static constexpr uint32_t kAbi = 2;  // bumped with any change to this struct or the classes
   uint32_t abi = kAbi;
   Expected<std::unique_ptr<DdsPublisher>> (*create_publisher)(const DdsOptions&) = nullptr;
   Expected<std::unique_ptr<DdsListener>> (*create_listener)(const DdsOptions&) = nullptr;
   Expected<std::unique_ptr<PointCloud2Reader>> (*create_pointcloud2_reader)(
       const PointCloud2Options&) = nullptr;
+  Expected<std::unique_ptr<TwistReader>> (*create_twist_reader)(const TwistOptions&) = nullptr;
 };
 
 // The module's one exported symbol.
@@ -46,5 +50,6 @@ Expected<std::unique_ptr<DdsPublisher>> create_cyclone_publisher(const DdsOption
 Expected<std::unique_ptr<DdsListener>> create_cyclone_listener(const DdsOptions& o);
 Expected<std::unique_ptr<PointCloud2Reader>> create_cyclone_pointcloud2_reader(
     const PointCloud2Options& o);
+Expected<std::unique_ptr<TwistReader>> create_cyclone_twist_reader(const TwistOptions& o);
 
 }  // namespace aprt

@@ -72,6 +72,67 @@ Expected<OdometrySeries> OdometrySeries::load(const char* path) {
   return parse(text, path);
 }
 
+namespace {
+
+// base_link driven at speed v and yaw rate w for h seconds from `r` (its
+// pose in the odometry frame): an arc, a line when straight.
+void advance(OdometryReading* r, double v, double w, double h) noexcept {
+  if (std::fabs(w * h) < 1e-9) {
+    r->x += v * h * std::cos(r->yaw);
+    r->y += v * h * std::sin(r->yaw);
+  } else {
+    r->x += v / w * (std::sin(r->yaw + w * h) - std::sin(r->yaw));
+    r->y += v / w * (std::cos(r->yaw) - std::cos(r->yaw + w * h));
+  }
+  r->yaw += w * h;
+  r->distance_m += std::fabs(v) * h;
+  r->t_s += h;
+}
+
+}  // namespace
+
+void OdometryTrack::add(const OdometrySample& s) noexcept {
+  OdometryReading r;
+  r.valid = true;
+  r.t_s = s.t_s;
+  if (size_ > 0) {
+    const Entry& last = e_[(head_ + kCapacity - 1) % kCapacity];
+    const double h = s.t_s - last.s.t_s;
+    if (!(h > 0)) {
+      if (h == 0) return;  // the same stamp again
+      ++epoch_;            // the clock went back
+    } else if (h > OdometrySeries::kMaxGapS) {
+      ++epoch_;  // silent too long: what happened in between is not known
+    } else {
+      r = last.r;
+      advance(&r, last.s.speed_mps, last.s.yaw_rate_radps, h);
+      r.t_s = s.t_s;
+    }
+  }
+  r.epoch = epoch_;
+  e_[head_] = {s, r};
+  head_ = (head_ + 1) % kCapacity;
+  if (size_ < kCapacity) ++size_;
+}
+
+OdometryReading OdometryTrack::at(double t_s) const noexcept {
+  // Newest first: a frame's time is usually within the last few samples.
+  for (int i = 0; i < size_; ++i) {
+    const Entry& e = e_[(head_ + kCapacity - 1 - i) % kCapacity];
+    if (e.s.t_s > t_s) continue;
+    const double h = t_s - e.s.t_s;
+    if (h > OdometrySeries::kMaxGapS) return {};
+    if (i > 0 && e_[(head_ + kCapacity - i) % kCapacity].r.epoch != e.r.epoch) {
+      // t falls in a gap the next sample's new epoch began after.
+      return {};
+    }
+    OdometryReading r = e.r;
+    advance(&r, e.s.speed_mps, e.s.yaw_rate_radps, h);
+    return r;
+  }
+  return {};  // older than everything kept
+}
+
 bool motion_between(const OdometryReading& a, const OdometryReading& b,
                     PlanarMotion* out) noexcept {
   *out = PlanarMotion{};
@@ -94,27 +155,22 @@ bool OdometrySeries::motion(double t0, double t1, PlanarMotion* out) const noexc
                              [](double t, const OdometrySample& s) { return t < s.t_s; });
   size_t k = size_t(it - samples_.begin()) - 1;
   if (t0 - samples_[k].t_s > kMaxGapS) return false;
-  double t = t0, heading = 0;
-  while (t < t1) {
+  // base_link's pose in its own frame at t0, driven piece by piece.
+  OdometryReading r;
+  r.t_s = t0;
+  while (r.t_s < t1) {
     const OdometrySample& s = samples_[k];
     const double next = k + 1 < samples_.size() ? samples_[k + 1].t_s : INFINITY;
     const double end = std::min(t1, next);
     if (end - s.t_s > kMaxGapS) return false;  // held too long: the bus was silent
-    const double h = end - t, v = s.speed_mps, w = s.yaw_rate_radps;
-    // Constant speed and yaw rate over the piece: an arc (a line when straight).
-    if (std::fabs(w * h) < 1e-9) {
-      out->dx += v * h * std::cos(heading);
-      out->dy += v * h * std::sin(heading);
-    } else {
-      out->dx += v / w * (std::sin(heading + w * h) - std::sin(heading));
-      out->dy += v / w * (std::cos(heading) - std::cos(heading + w * h));
-    }
-    heading += w * h;
-    out->distance_m += std::fabs(v) * h;
-    t = end;
+    advance(&r, s.speed_mps, s.yaw_rate_radps, end - r.t_s);
+    r.t_s = end;
     if (end >= next) ++k;
   }
-  out->dyaw = heading;
+  out->dx = r.x;
+  out->dy = r.y;
+  out->dyaw = r.yaw;
+  out->distance_m = r.distance_m;
   out->dt_s = t1 - t0;
   return true;
 }

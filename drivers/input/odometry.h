@@ -79,4 +79,29 @@ class OdometrySeries {
   std::vector<OdometrySample> samples_;
 };
 
+// A live odometry's recent past, integrated: samples in (in time order, on
+// one clock), the reading at any time within it out -- between two samples
+// the earlier one holds, after the newest it holds for at most
+// OdometrySeries::kMaxGapS. A gap longer than that, or a stamp that goes
+// back, begins a new epoch. Fixed capacity, owned by one thread (the
+// inference thread, fed from the odometry thread's queue). @rt: no
+// allocation.
+class OdometryTrack {
+ public:
+  static constexpr int kCapacity = 1024;  // ~10 s of a 100 Hz bus
+
+  void add(const OdometrySample& s) noexcept;
+  OdometryReading at(double t_s) const noexcept;
+  uint64_t epochs() const { return epoch_ + (size_ > 0 ? 1 : 0); }
+
+ private:
+  struct Entry {
+    OdometrySample s;
+    OdometryReading r;  // the reading at s.t_s
+  };
+  Entry e_[kCapacity];
+  int head_ = 0, size_ = 0;  // ring: head_ is the next slot
+  uint32_t epoch_ = 0;
+};
+
 }  // namespace aprt

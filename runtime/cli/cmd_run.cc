@@ -226,7 +226,7 @@ int cmd_run(int argc, char** argv) {
     adjust(companion.source);
     if (!replay) companion.source.replay.path = kept;
   }
-  if (replay && cfg.sanity.filter.enabled) {
+  if (replay && cfg.sanity.filter.enabled && cfg.odometry.source == "replay") {
     // The configuration's filter was chosen for its own drive; a sequence
     // given on the command line without odometry (an MCAP recording, a
     // folder without odometry.txt) runs with the validity gate alone, and

@@ -216,7 +216,7 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
   if (!(s = (expr))) return s.error()
   APRT_TRY(r.map(root, "",
                  {"model", "model_signing", "engine", "source", "cameras", "fusion", "output",
-                  "extrinsics", "supervisor", "sanity", "threads", "fault_injection"}));
+                  "extrinsics", "supervisor", "sanity", "odometry", "threads", "fault_injection"}));
   if (root && root->kind == Node::kMap) {
     APRT_TRY(r.str(root, "", "model", &c.model));
     if (const Node* fi = root->get("fault_injection"); fi && fi->kind != Node::kNull) {
@@ -388,6 +388,23 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(r.num(fl, fp, "lost_radius_m", 0.1, 1e6, &f.lost_radius_m));
     APRT_TRY(r.num(fl, fp, "position_sigma_scale", 0.01, 100, &f.position_sigma_scale));
 
+    const Node* od = root->get("odometry");
+    Config::Odometry& o = c.odometry;
+    APRT_TRY(
+        r.map(od, "odometry", {"source", "topic", "domain", "reliable", "loopback_only", "depth"}));
+    APRT_TRY(r.str(od, "odometry", "source", &o.source));
+    APRT_TRY(r.str(od, "odometry", "topic", &o.topic));
+    APRT_TRY(r.integer(od, "odometry", "domain", 0, 232, &o.domain));
+    APRT_TRY(r.boolean(od, "odometry", "reliable", &o.reliable));
+    APRT_TRY(r.boolean(od, "odometry", "loopback_only", &o.loopback_only));
+    APRT_TRY(r.integer(od, "odometry", "depth", 1, 1000, &o.depth));
+    if (o.source != "replay" && o.source != "dds") {
+      return Error(Errc::kInvalidArgument,
+                   "%s: odometry.source: '%s' is not one of replay (a replayed drive's "
+                   "odometry.txt), dds (a TwistWithCovarianceStamped topic)",
+                   origin.c_str(), o.source.c_str());
+    }
+
     const Node* th = root->get("threads");
     APRT_TRY(r.map(th, "threads",
                    {"capture", "inference", "publish", "supervisor", "lock_memory", "stack_kib"}));
@@ -420,11 +437,11 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     // Only a camera replay with odometry.txt carries the vehicle's motion in
     // this version; anywhere else every pose would go out flagged.
     const Config::Source& trigger = c.cameras.empty() ? c.source : c.cameras[0].source;
-    if (trigger.type != SourceType::kReplay) {
+    if (c.odometry.source == "replay" && trigger.type != SourceType::kReplay) {
       return Error(Errc::kInvalidArgument,
-                   "%s: sanity.filter needs the vehicle's odometry, which only a replay source "
-                   "with odometry.txt supplies in this version (source.type is %s; no bus "
-                   "odometry input yet): disable the filter for this source",
+                   "%s: sanity.filter needs the vehicle's odometry: with odometry.source replay "
+                   "only a replayed drive's odometry.txt gives it (source.type is %s); set "
+                   "odometry.source: dds for the vehicle's twist topic, or disable the filter",
                    origin.c_str(), source_type_name(trigger.type));
     }
     if (!c.fusion.companion.empty()) {

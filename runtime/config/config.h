@@ -213,6 +213,18 @@ struct Config {
     } filter;
   } sanity;
 
+  // Where the pose filter (sanity.filter) gets the vehicle's motion.
+  struct Odometry {
+    // replay: a replayed drive's odometry.txt; dds: a ROS 2 topic of
+    // geometry_msgs/msg/TwistWithCovarianceStamped (drivers/input/twist/).
+    std::string source = "replay";
+    std::string topic = "/sensing/vehicle_velocity_converter/twist_with_covariance";
+    int domain = 0;
+    bool reliable = true;
+    bool loopback_only = false;
+    int depth = 50;
+  } odometry;
+
   struct Threads {
     ThreadConfig capture, inference, publish, supervisor;
     bool lock_memory = true;  // mlockall

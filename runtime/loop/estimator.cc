@@ -171,6 +171,14 @@ uint32_t Estimator::check(PoseRecord* rec, uint32_t flags) noexcept {
   // The filter's pose goes out instead of the estimate: valid by its own
   // covariance, whatever this frame's estimate was; a late or stale frame
   // still withholds it.
+  if (odometry_) {
+    // The frame's time on the twists' clock (ROS time): its own stamp, or
+    // its capture time moved onto the realtime clock.
+    const int64_t t = rec->source_stamp_ns != 0
+                          ? rec->source_stamp_ns
+                          : rec->capture_ns + (realtime_ns() - monotonic_ns());
+    rec->odometry = odometry_->reading_at(t);
+  }
   PlanarMotion motion;
   const bool moved = motion_between(last_odometry_, rec->odometry, &motion);
   last_odometry_ = rec->odometry;

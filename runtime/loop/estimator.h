@@ -15,6 +15,7 @@
 #include "runtime/config/config.h"
 #include "runtime/engine/engine.h"
 #include "runtime/loop/capture.h"
+#include "runtime/loop/odometry_input.h"
 #include "runtime/loop/pose_record.h"
 #include "runtime/pose/odometry_filter.h"
 #include "runtime/pose/pose_fusion.h"
@@ -65,6 +66,10 @@ class Estimator {
   // pose becomes the filter's (runtime/pose/odometry_filter.h).
   uint32_t check(PoseRecord* rec, uint32_t flags) noexcept;
 
+  // The live odometry the filter takes the frames' readings from (instead
+  // of the frames' own); null: the frames'.
+  void use_odometry(OdometryInput* in) { odometry_ = in; }
+
   const ScanNote& last_scan() const { return scan_; }
   // The validity gate, and the time (its clock) of the last estimate it checked.
   const PoseGate& gate() const { return gate_; }
@@ -85,7 +90,8 @@ class Estimator {
   FusionParams fusion_;
   PoseGate gate_;
   bool filtered_ = false;
-  OdometryReading last_odometry_;  // the frame before's (the filter's motion is from it)
+  OdometryReading last_odometry_;
+  OdometryInput* odometry_ = nullptr;  // the frame before's (the filter's motion is from it)
   OdometryFilter filter_{OdometryFilterParams{}, Eigen::Isometry3d::Identity()};
   GateClock clock_;  // the frames' own stamps where they have them
   double last_gate_s_ = 0;

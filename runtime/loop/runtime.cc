@@ -51,7 +51,11 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config, const C
     r->channel_ptrs_.push_back(ch.value().get());
     r->channels_.push_back(std::move(ch.value()));
   }
-  if (c.sanity.filter.enabled && !r->channels_[0]->source->has_odometry()) {
+  if (c.sanity.filter.enabled && c.odometry.source == "dds") {
+    auto od = OdometryInput::create(c.odometry);
+    if (!od) return Error(od.error().code(), "run: %s", od.error().message());
+    r->odometry_ = std::move(od.value());
+  } else if (c.sanity.filter.enabled && !r->channels_[0]->source->has_odometry()) {
     return Error(Errc::kInvalidArgument,
                  "run: sanity.filter needs the vehicle's odometry, and %s has no odometry.txt "
                  "(python3 -m aprt_tools odometry FOLDER writes one for a synthetic drive)",
@@ -59,6 +63,7 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config, const C
   }
   r->estimator_.reset(new (std::nothrow)
                           Estimator(c, r->channel_ptrs_.data(), r->channel_ptrs_.size()));
+  if (r->odometry_) r->estimator_->use_odometry(r->odometry_.get());
   if (companion) {
     auto co = Companion::create(*companion, c.fusion.companion_max_age_ms);
     if (!co) return co.error();
@@ -409,6 +414,12 @@ int Runtime::run() {
     sum.memory = memory;
     print_run_summary(sum);
     if (companion_) print_companion_summary();
+    if (odometry_) {
+      const auto u = [](uint64_t v) { return static_cast<unsigned long long>(v); };
+      std::printf("odometry: dds %s: %llu twists taken, %llu refused, %llu dropped (queue full)\n",
+                  odometry_->topic().c_str(), u(odometry_->received()), u(odometry_->refused()),
+                  u(odometry_->dropped()));
+    }
     outputs_->print_summary();
   }
   return code;

@@ -34,6 +34,7 @@
 #include "runtime/loop/fault_injector.h"
 #include "runtime/loop/loop_shared.h"
 #include "runtime/loop/model_slot.h"
+#include "runtime/loop/odometry_input.h"
 #include "runtime/loop/pose_outputs.h"
 #include "runtime/loop/process_memory.h"
 #include "runtime/loop/publisher.h"
@@ -119,6 +120,7 @@ class Runtime {
   std::unique_ptr<ModelSlot> models_;
   std::vector<std::unique_ptr<CaptureChannel>> channels_;  // [0] is the trigger
   std::vector<CaptureChannel*> channel_ptrs_;
+  std::unique_ptr<OdometryInput> odometry_;  // odometry.source dds with the filter, or null
   std::unique_ptr<Estimator> estimator_;
   std::unique_ptr<Companion> companion_;  // fusion.companion, or null
   FaultInjector no_faults_;               // the companion's capture thread injects none

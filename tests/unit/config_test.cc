@@ -312,9 +312,18 @@ TEST(Config, PoseFilter) {
   EXPECT_EQ(c->sanity.filter.confirm, 3);
   EXPECT_EQ(c->sanity.filter.position_sigma_scale, 0.6);
   EXPECT_FALSE(parse_config("model: m\nsource: {replay: {path: d}}\n", "t")->sanity.filter.enabled);
-  // Only a replay carries odometry in this version: elsewhere it is refused by name.
+  // A live camera needs the vehicle's odometry from the bus (odometry.source dds).
   expect_refused("model: m\nsource: {type: v4l2}\nsanity: {filter: {enabled: true}}\n",
                  "sanity.filter needs the vehicle's odometry");
+  auto live = parse_config(
+      "model: m\nsource: {type: v4l2}\nsanity: {filter: {enabled: true}}\n"
+      "odometry: {source: dds, topic: /twist, domain: 3}\n",
+      "test.yaml");
+  ASSERT_TRUE(live) << live.error().message();
+  EXPECT_EQ(live->odometry.topic, "/twist");
+  EXPECT_EQ(live->odometry.domain, 3);
+  expect_refused("model: m\nsource: {replay: {path: d}}\nodometry: {source: can}\n",
+                 "odometry.source: 'can' is not one of");
   expect_refused(
       "model: m\nsource: {replay: {path: d}}\nfusion: {companion: c.yaml}\n"
       "sanity: {filter: {enabled: true}}\n",
@@ -324,7 +333,7 @@ TEST(Config, PoseFilter) {
 }
 
 TEST(Config, ShippedConfigurationsParse) {
-  for (const char* name : {"config/default.yaml", "config/aprt.yaml"}) {
+  for (const char* name : {"config/default.yaml", "config/aprt.yaml", "config/autoware.yaml"}) {
     auto c = load_config(std::string(APRT_SOURCE_DIR) + "/" + name);
     ASSERT_TRUE(c) << name << ": " << c.error().message();
   }
@@ -335,6 +344,9 @@ TEST(Config, ShippedConfigurationsParse) {
   EXPECT_EQ(ecu->model[0], '/');  // the service's working directory is not the data folder
   auto demo = load_config(std::string(APRT_SOURCE_DIR) + "/config/default.yaml");
   EXPECT_TRUE(demo->sanity.filter.enabled);  // the demo drive has odometry.txt
+  auto autoware = load_config(std::string(APRT_SOURCE_DIR) + "/config/autoware.yaml");
+  EXPECT_TRUE(autoware->sanity.filter.enabled);  // on the vehicle's twist topic
+  EXPECT_EQ(autoware->odometry.source, "dds");
 }
 
 TEST(Config, RefusesWithKeyPathAndLine) {

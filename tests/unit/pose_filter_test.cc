@@ -302,5 +302,39 @@ TEST(Odometry, ParseErrorsNameTheLine) {
   }
 }
 
+// The live track (OdometryTrack) integrates as the file's series does, and
+// its gaps and backward stamps begin new epochs, across which there is no
+// motion.
+TEST(Odometry, ALiveTrackAgreesWithTheSeriesAndBreaksAtGaps) {
+  OdometryTrack track;
+  std::vector<OdometrySample> s;
+  for (int k = 0; k <= 200; ++k) {
+    s.push_back({k * 0.01, kSpeed + 0.01 * k, kYawRate * std::sin(0.05 * k)});
+    track.add(s.back());
+  }
+  auto series = OdometrySeries::from_samples(s, "test");
+  ASSERT_TRUE(series);
+  PlanarMotion from_series, from_track;
+  ASSERT_TRUE(series->motion(0.333, 1.777, &from_series));
+  ASSERT_TRUE(motion_between(track.at(0.333), track.at(1.777), &from_track));
+  EXPECT_NEAR(from_track.dx, from_series.dx, 1e-9);
+  EXPECT_NEAR(from_track.dy, from_series.dy, 1e-9);
+  EXPECT_NEAR(from_track.dyaw, from_series.dyaw, 1e-12);
+  EXPECT_NEAR(from_track.distance_m, from_series.distance_m, 1e-9);
+  // Held past the newest sample for 0.5 s at most; nothing before the oldest.
+  EXPECT_TRUE(track.at(2.0 + 0.4).valid);
+  EXPECT_FALSE(track.at(2.0 + 0.6).valid);
+  EXPECT_FALSE(track.at(-0.1).valid);
+  // A second of silence: a new epoch, no motion across it.
+  track.add({3.5, kSpeed, 0});
+  track.add({3.51, kSpeed, 0});
+  EXPECT_FALSE(motion_between(track.at(1.9), track.at(3.505), &from_track));
+  EXPECT_TRUE(motion_between(track.at(3.5), track.at(3.505), &from_track));
+  EXPECT_NEAR(from_track.dx, kSpeed * 0.005, 1e-9);
+  // A stamp that goes back: another epoch.
+  track.add({3.0, kSpeed, 0});
+  EXPECT_FALSE(motion_between(track.at(3.505), track.at(3.1), &from_track));
+}
+
 }  // namespace
 }  // namespace aprt
