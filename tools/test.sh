@@ -45,8 +45,11 @@ case "${1:-}" in
     ;;
   --tsan)
     cmake --preset tsan >/dev/null
-    cmake --build --preset tsan -j "$jobs" --target unit_tests kernel_tests run_loop_tests
+    cmake --build --preset tsan -j "$jobs" --target unit_tests kernel_tests run_loop_tests dds_tests
     TSAN_OPTIONS="halt_on_error=1" build/tsan/bin/unit_tests --gtest_filter='Engine.*'
+    # The odometry thread handing twists to the inference thread (odometry.source dds).
+    TSAN_OPTIONS="halt_on_error=1 suppressions=$PWD/tests/tsan.supp" build/tsan/bin/dds_tests \
+      --gtest_filter='Dds.OdometryInput*:Dds.TheFilterRunsOnLiveOdometry'
     # The supervised loop's four threads, end to end: its fixtures (tiny model,
     # synthetic drive) come from the default run's build.
     cmake --preset asan >/dev/null
