@@ -20,14 +20,15 @@ Expected<std::unique_ptr<OdometryInput>> OdometryInput::create(const Config::Odo
   if (!r) return Error(r.error().code(), "odometry: %s", r.error().message());
   in->reader_ = std::move(r.value());
   in->topic_ = c.topic;
-  // Normal scheduling: nothing waits for it, and it waits for the bus only.
+  // Normal scheduling: nothing waits for it, and it waits for the bus only;
+  // the stack of the loop's threads that call into the DDS library.
   if (Status st = start_thread(
           &in->thread_,
           [](void* self) -> void* {
             static_cast<OdometryInput*>(self)->run();
             return nullptr;
           },
-          in.get(), ThreadConfig{}, "aprt-odometry", 256 * 1024);
+          in.get(), ThreadConfig{}, "aprt-odometry", 512 * 1024);
       !st) {
     return Error(st.error().code(), "odometry: %s", st.error().message());
   }
