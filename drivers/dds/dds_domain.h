@@ -27,4 +27,16 @@ Expected<int32_t> dds_join(uint32_t domain, bool loopback_only, int32_t* domain_
 // "dds: WHAT failed: <Cyclone's reason>".
 Error dds_failure(const char* what, int32_t rc);
 
+// A reader of the ROS 2 topic `ros_name` with the generated type `descriptor`
+// (a dds_topic_descriptor_t, opaque here): reliable or best effort,
+// keep-last `depth`, and a waitset that wakes on its samples (the inputs:
+// PointCloud2, the vehicle's twist).
+struct DdsReader {
+  int32_t reader = 0, waitset = 0;
+};
+Expected<DdsReader> dds_open_reader(int32_t participant, const void* descriptor,
+                                    const std::string& ros_name, bool reliable, int depth);
+// Writers matched with `reader` right now.
+int dds_publishers(int32_t reader);
+
 }  // namespace aprt

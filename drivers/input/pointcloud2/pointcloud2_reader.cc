@@ -43,25 +43,11 @@ Expected<std::unique_ptr<PointCloud2Reader>> create_cyclone_pointcloud2_reader(
   auto participant = dds_join(o.domain, o.loopback_only, &r->domain_);
   if (!participant) return participant.error();
   r->participant_ = participant.value();
-  const std::string topic = ros_topic(o.topic);
-  const dds_entity_t t = dds_create_topic(r->participant_, &sensor_msgs_msg_dds__PointCloud2__desc,
-                                          topic.c_str(), nullptr, nullptr);
-  if (t < 0) {
-    return Error(Errc::kInvalidArgument, "dds: cannot create topic '%s' (from '%s'): %s",
-                 topic.c_str(), o.topic.c_str(), dds_strretcode(t));
-  }
-  dds_qos_t* q = dds_create_qos();
-  dds_qset_reliability(q, o.reliable ? DDS_RELIABILITY_RELIABLE : DDS_RELIABILITY_BEST_EFFORT,
-                       DDS_SECS(1));
-  dds_qset_history(q, DDS_HISTORY_KEEP_LAST, o.depth > 0 ? o.depth : 1);
-  r->reader_ = dds_create_reader(r->participant_, t, q, nullptr);
-  dds_delete_qos(q);
-  if (r->reader_ < 0) return dds_failure("create reader", r->reader_);
-  r->waitset_ = dds_create_waitset(r->participant_);
-  const dds_entity_t rc = dds_create_readcondition(r->reader_, DDS_ANY_STATE);
-  if (r->waitset_ < 0 || rc < 0 || dds_waitset_attach(r->waitset_, rc, 0) < 0) {
-    return dds_failure("create waitset", r->waitset_ < 0 ? r->waitset_ : rc);
-  }
+  auto rd = dds_open_reader(r->participant_, &sensor_msgs_msg_dds__PointCloud2__desc, o.topic,
+                            o.reliable, o.depth);
+  if (!rd) return rd.error();
+  r->reader_ = rd->reader;
+  r->waitset_ = rd->waitset;
   return std::unique_ptr<PointCloud2Reader>(std::move(r));
 }
 
@@ -116,9 +102,7 @@ bool CycloneCloudReader::take_latest(const PointRegion& region, PointCloud* out,
 }
 
 int CycloneCloudReader::publishers() const {
-  dds_subscription_matched_status_t st{};
-  return dds_get_subscription_matched_status(reader_, &st) == DDS_RETCODE_OK ? int(st.current_count)
-                                                                             : 0;
+  return dds_publishers(reader_);
 }
 
 }  // namespace aprt
