@@ -35,8 +35,10 @@ endif()
 install(FILES config/default.yaml config/autoware.yaml config/aprt_pose.dbc config/aprt.service
         DESTINATION ${APRT_INSTALL_DATADIR}/config COMPONENT runtime)
 install(DIRECTORY config/idl DESTINATION ${APRT_INSTALL_DATADIR}/config COMPONENT runtime)
+# (A candidate model not yet shipped, model_bin/*_candidate.aprt, stays out.)
 install(DIRECTORY model_bin/ DESTINATION ${APRT_INSTALL_DATADIR}/model_bin COMPONENT runtime
-        FILES_MATCHING PATTERN "*.aprt" PATTERN "*.json" PATTERN "*.md")
+        FILES_MATCHING PATTERN "*.aprt" PATTERN "*.json" PATTERN "*.md"
+        PATTERN "*_candidate.aprt" EXCLUDE)
 install(DIRECTORY data/demo_drive DESTINATION ${APRT_INSTALL_DATADIR}/data COMPONENT runtime)
 install(FILES config/aprt.yaml DESTINATION ${CMAKE_INSTALL_FULL_SYSCONFDIR}/aprt
         COMPONENT runtime)
