@@ -96,7 +96,7 @@ Expected<std::unique_ptr<Companion>> Companion::create(const Config& config, dou
   c->channel_ = std::move(ch.value());
   c->channel_->thread_name = "aprt-companion";
   c->channels_[0] = c->channel_.get();
-  c->estimator_.reset(new (std::nothrow) Estimator(cfg, c->channels_, 1));
+  c->estimator_.reset(new (std::nothrow) Estimator(cfg, c->engine_->meta(), c->channels_, 1));
   if (!c->estimator_) return Error(Errc::kOutOfMemory, "run: out of memory");
   fallback_sigma(cfg, c->engine_->meta(), &c->sigma_pos_m_, &c->sigma_rot_rad_);
   return c;

@@ -9,7 +9,8 @@
 
 namespace aprt {
 
-Estimator::Estimator(const Config& config, CaptureChannel* const* channels, size_t n)
+Estimator::Estimator(const Config& config, const ModelMeta& meta, CaptureChannel* const* channels,
+                     size_t n)
     : channels_(channels),
       n_(n),
       bounds_margin_(float(config.sanity.bounds_margin)),
@@ -21,7 +22,7 @@ Estimator::Estimator(const Config& config, CaptureChannel* const* channels, size
   fusion_.min_agreeing = config.fusion.min_agreeing;
   gate_ = PoseGate(pose_gate_params(config));
   filtered_ = config.sanity.filter.enabled;
-  filter_ = OdometryFilter(odometry_filter_params(config, ModelMeta{}),
+  filter_ = OdometryFilter(odometry_filter_params(config, meta),
                            n > 0 ? channels[0]->base_from_sensor : Eigen::Isometry3d::Identity());
 }
 
@@ -189,12 +190,8 @@ uint32_t Estimator::check(PoseRecord* rec, uint32_t flags) noexcept {
   note.fix = fp.fix;
   note.use = uint8_t(fp.use);
   note.refused = uint16_t(fp.refused < 65535 ? fp.refused : 65535);
-  // The published regions (the filter's sigmas as they go out).
-  note.radius95_m =
-      fp.fix
-          ? float(2.4477 * std::fmax(fp.sensor.sigma_position_m[0], fp.sensor.sigma_position_m[1]))
-          : -1.0f;
-  note.yaw95_deg = fp.fix ? float(1.96 * fp.sensor.sigma_rotation_rad[2] * 180.0 / M_PI) : -1.0f;
+  note.radius95_m = float(fp.radius95_m);
+  note.yaw95_deg = float(fp.yaw95_deg);
   for (int k = 0; k < 3; ++k) rec->base_position[k] = fp.base_position[k];
   for (int k = 0; k < 4; ++k) rec->base_orientation[k] = fp.base_orientation[k];
   return (flags & (kPoseStaleFrame | kPoseDeadlineMissed)) | fp.flags;

@@ -38,7 +38,9 @@ OdometryFilterParams odometry_filter_params(const Config& config, const ModelMet
 class Estimator {
  public:
   // channels: the run's channels (configuration order), n of them.
-  Estimator(const Config& config, CaptureChannel* const* channels, size_t n);
+  // meta: the running model's (the pose filter's sigma for a model without
+  // confidence outputs, as `aprt eval` takes it).
+  Estimator(const Config& config, const ModelMeta& meta, CaptureChannel* const* channels, size_t n);
 
   // Stamps rec with frame f's times and source and the inference's start;
   // returns kPoseStaleFrame when f waited longer than the supervisor's

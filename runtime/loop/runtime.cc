@@ -61,8 +61,8 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config, const C
                  "(python3 -m aprt_tools odometry FOLDER writes one for a synthetic drive)",
                  c.source.replay.path.c_str());
   }
-  r->estimator_.reset(new (std::nothrow)
-                          Estimator(c, r->channel_ptrs_.data(), r->channel_ptrs_.size()));
+  r->estimator_.reset(new (std::nothrow) Estimator(
+      c, r->models_->running().meta(), r->channel_ptrs_.data(), r->channel_ptrs_.size()));
   if (r->odometry_) r->estimator_->use_odometry(r->odometry_.get());
   if (companion) {
     auto co = Companion::create(*companion, c.fusion.companion_max_age_ms);

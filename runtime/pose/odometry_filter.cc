@@ -51,6 +51,10 @@ FilteredPose OdometryFilter::step(const PoseEstimate& sensor, uint32_t flags,
   out.use = o.use;
   out.refused = o.refused;
   out.fix = o.fix && have_attitude_;
+  if (out.fix) {
+    out.radius95_m = o.radius95_m;
+    out.yaw95_deg = o.yaw95_deg;
+  }
   if (!o.fix || !have_attitude_) {
     // No fix yet: the estimate as it is, never valid.
     out.sensor = sensor;

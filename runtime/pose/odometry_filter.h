@@ -24,8 +24,9 @@ struct FilteredPose {
   PoseEstimate sensor;  // what goes out, as the sensor's pose (console, errors, covariance)
   double base_position[3] = {};
   double base_orientation[4] = {1, 0, 0, 0};  // w x y z
-  uint32_t flags = 0;  // the filter's (0: valid) | the estimate's before a fix
-  bool fix = false;    // the filter has a pose (else: the estimate)
+  uint32_t flags = 0;                      // the filter's (0: valid) | the estimate's before a fix
+  bool fix = false;                        // the filter has a pose (else: the estimate)
+  double radius95_m = -1, yaw95_deg = -1;  // its published 95 % regions (-1: no fix)
   PoseFilter::Use use = PoseFilter::Use::kNone;
   int refused = 0;
 };

@@ -112,6 +112,9 @@ PoseFilter::Output PoseFilter::output(const State& k, uint32_t flags) const noex
   o.cov_xy = k.P[1] * p_.position_sigma_scale * p_.position_sigma_scale;
   const double yaw95 = kZ95 * o.pose.sigma_yaw * 180.0 / kPiRad;
   if (!(radius95(k.P) <= p_.max_radius_m) || !(yaw95 <= p_.max_yaw_deg)) flags |= kPoseUncertain;
+  // As published: the position sigma scaled (validity takes the filter's own).
+  o.radius95_m = radius95(k.P) * p_.position_sigma_scale;
+  o.yaw95_deg = yaw95;
   o.flags = flags;
   return o;
 }

@@ -68,6 +68,7 @@ class PoseFilter {
     uint32_t flags = 0;  // kPoseUnconfirmed, kPoseUncertain, kPoseNoOdometry; 0: valid
     PlanarPose pose;     // the filter's pose and its 1-sigma (the covariance's diagonal)
     double cov_xy = 0;   // the covariance's x-y term (m^2)
+    double radius95_m = -1, yaw95_deg = -1;  // the published 95 % regions (-1: no fix)
     Use use = Use::kNone;
     int refused = 0;  // estimates refused in a row
   };

@@ -452,7 +452,7 @@ TEST(Dds, TheFilterRunsOnLiveOdometry) {
   for (int i = 0; i < 300 && (*in)->received() < 300; ++i) usleep(10000);
   ASSERT_EQ((*in)->received(), 300u);
   usleep(50000);
-  Estimator est(cfg.value(), nullptr, 0);
+  Estimator est(cfg.value(), ModelMeta{}, nullptr, 0);
   est.use_odometry(in->get());
   uint32_t flags = 0;
   for (int k = 0; k < 60; ++k) {  // 25 Hz frames over 2.4 s

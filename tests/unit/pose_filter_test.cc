@@ -98,6 +98,8 @@ TEST(PoseFilter, StartsFromAgreeingEstimatesThenBeatsThem) {
     }
     if (k >= 100) {
       EXPECT_EQ(o.flags, 0u) << k;
+      EXPECT_GT(o.radius95_m, 0.0) << k;  // valid: its own region within the limit
+      EXPECT_LE(o.radius95_m, params().max_radius_m) << k;
       sum_filter += distance(o.pose, truth);
       sum_estimate += distance(z, truth);
       ++n;
