@@ -70,8 +70,6 @@ class OdometrySeries {
   bool motion(double t0, double t1, PlanarMotion* out) const noexcept;
 
   size_t size() const { return samples_.size(); }
-  double first_s() const { return samples_.empty() ? 0 : samples_.front().t_s; }
-  double last_s() const { return samples_.empty() ? 0 : samples_.back().t_s; }
   // The longest a sample is held before the series counts as silent.
   static constexpr double kMaxGapS = 0.5;
 
@@ -92,7 +90,6 @@ class OdometryTrack {
 
   void add(const OdometrySample& s) noexcept;
   OdometryReading at(double t_s) const noexcept;
-  uint64_t epochs() const { return epoch_ + (size_ > 0 ? 1 : 0); }
 
  private:
   struct Entry {

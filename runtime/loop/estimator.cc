@@ -21,7 +21,6 @@ Estimator::Estimator(const Config& config, const ModelMeta& meta, CaptureChannel
   fusion_.max_orientation_spread_rad = config.fusion.max_orientation_spread_deg * M_PI / 180.0;
   fusion_.min_agreeing = config.fusion.min_agreeing;
   gate_ = PoseGate(pose_gate_params(config));
-  filtered_ = config.sanity.filter.enabled;
   filter_ = OdometryFilter(odometry_filter_params(config, meta),
                            n > 0 ? channels[0]->base_from_sensor : Eigen::Isometry3d::Identity());
 }
@@ -66,8 +65,9 @@ OdometryFilterParams odometry_filter_params(const Config& config, const ModelMet
   p.filter.max_yaw_deg = f.max_yaw_deg;
   p.filter.lost_radius_m = f.lost_radius_m;
   p.filter.position_sigma_scale = f.position_sigma_scale;
-  p.usable_radius_m = config.sanity.track.max_radius_m;
-  p.usable_yaw_deg = config.sanity.track.max_yaw_deg;
+  p.filter.estimate_sigma_scale = f.estimate_sigma_scale;
+  p.usable_radius_m = f.estimate_max_radius_m;
+  p.usable_yaw_deg = f.estimate_max_yaw_deg;
   fallback_sigma(config, meta, &p.fallback_sigma_m, &p.fallback_sigma_rad);
   return p;
 }
@@ -168,7 +168,7 @@ uint32_t Estimator::check(PoseRecord* rec, uint32_t flags) noexcept {
   // everything else the pose itself or the fusion flagged is not used by it.
   const uint32_t own = flags & ~(kPoseStaleFrame | kPoseDeadlineMissed);
   last_gate_s_ = clock_.seconds(rec->capture_ns, rec->source_stamp_ns);
-  if (!filtered_) return flags | gate_.check(rec->pose, last_gate_s_, own);
+  if (!filter_.enabled()) return flags | gate_.check(rec->pose, last_gate_s_, own);
   // The filter's pose goes out instead of the estimate: valid by its own
   // covariance, whatever this frame's estimate was; a late or stale frame
   // still withholds it.

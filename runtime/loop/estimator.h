@@ -91,7 +91,6 @@ class Estimator {
   int64_t deadline_ns_;
   FusionParams fusion_;
   PoseGate gate_;
-  bool filtered_ = false;
   OdometryReading last_odometry_;
   OdometryInput* odometry_ = nullptr;  // the frame before's (the filter's motion is from it)
   OdometryFilter filter_{OdometryFilterParams{}, Eigen::Isometry3d::Identity()};

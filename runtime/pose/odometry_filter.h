@@ -49,6 +49,8 @@ class OdometryFilter {
   FilteredPose step(const PoseEstimate& sensor, uint32_t flags,
                     const PlanarMotion* motion) noexcept;
   void reset() noexcept;
+  // Off: the estimator's validity gate decides alone (no odometry).
+  bool enabled() const { return p_.filter.enabled; }
 
  private:
   OdometryFilterParams p_;

@@ -133,10 +133,15 @@ PoseFilter::Output PoseFilter::step(const PlanarMotion* motion,
   if (candidate_.count > 0) predict(&candidate_, *motion);
   Use use = Use::kNone;
   if (estimate) {
+    // The estimate as the filter weighs it (an unconfirmed output below
+    // still carries the model's own sigma).
+    PlanarPose z = *estimate;
+    z.sigma_x *= p_.estimate_sigma_scale;
+    z.sigma_y *= p_.estimate_sigma_scale;
     if (fix_.count > 0) {
       State next;
-      if (innovation(fix_, *estimate, false, nullptr) <= p_.gate_chi2) {
-        (void)innovation(fix_, *estimate, true, &next);
+      if (innovation(fix_, z, false, nullptr) <= p_.gate_chi2) {
+        (void)innovation(fix_, z, true, &next);
         fix_ = next;
         refused_ = 0;
         candidate_ = State{};
@@ -150,12 +155,11 @@ PoseFilter::Output PoseFilter::step(const PlanarMotion* motion,
       // A run of estimates that agree with each other along the odometry:
       // the fix to be, or the one that takes over a fix refusing everything.
       State next;
-      if (candidate_.count > 0 &&
-          innovation(candidate_, *estimate, false, nullptr) <= p_.gate_chi2) {
-        (void)innovation(candidate_, *estimate, true, &next);
+      if (candidate_.count > 0 && innovation(candidate_, z, false, nullptr) <= p_.gate_chi2) {
+        (void)innovation(candidate_, z, true, &next);
         candidate_ = next;
       } else {
-        candidate_ = start(*estimate);
+        candidate_ = start(z);
       }
       if (candidate_.count >= p_.confirm && (fix_.count == 0 || refused_ >= p_.take_over_after)) {
         use = fix_.count == 0 ? Use::kStarted : Use::kTookOver;

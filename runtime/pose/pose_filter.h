@@ -50,6 +50,11 @@ struct PoseFilterParams {
   // validation drives: the estimates' sigmas (calibrated per frame, heavy
   // tail included) overstate the error of the ones the filter takes.
   double position_sigma_scale = 1.0;
+  // An estimate's position sigma as the filter weighs it: the model's times
+  // this. The model's sigma is calibrated to cover 95 % of all its frames,
+  // the wrong-street ones included; the filter refuses those at its gate, so
+  // the ones it takes are overstated by that tail (calibrated on validation).
+  double estimate_sigma_scale = 1.0;
 };
 
 // A planar estimate of base_link in the map with one standard deviation per axis.

@@ -28,6 +28,7 @@
 #include "runtime/config/config.h"
 #include "runtime/loop/model_signature.h"
 #include "runtime/loop/runtime.h"
+#include "tests/support/loop_test_config.h"
 
 namespace aprt {
 namespace {
@@ -37,22 +38,18 @@ uint32_t test_domain() {
 }
 
 Config base_config() {
-  Config c;
   const char* dir = std::getenv("APRT_RUN_FIXTURES");
-  if (!dir) return c;
-  c.model = std::string(dir) + "/golden/tiny_op13/model.aprt";
-  c.source.replay.path = std::string(dir) + "/run_replay";
-  c.source.replay.rate_hz = 0;  // as fast as inference takes frames
-  c.output.console = false;
+  if (!dir) return Config{};
+  const Config defaults;
+  Config c = test::loop_test_config(std::string(dir) + "/golden/tiny_op13/model.aprt",
+                                    defaults.source.type, std::string(dir) + "/run_replay");
+  // Unlike the shared configuration: the summary and the status on (tests
+  // read them), the supervisor's own frame timeout and fault delay (the fault
+  // tests count on them), the demo camera's extrinsic.
   c.output.summary = true;
-  c.output.sigma_position_m = 2.0;
-  c.output.sigma_orientation_deg = 3.0;
   c.output.status_rate_hz = 20;
-  c.sanity.bounds_margin = 10;  // a test model: only non-finite output is flagged
-  c.sanity.max_jump_m = 0;
-  c.supervisor.inference_deadline_ms = 10000;
-  c.supervisor.systemd = false;
-  c.threads.lock_memory = false;
+  c.supervisor.frame_timeout_ms = defaults.supervisor.frame_timeout_ms;
+  c.supervisor.fault_after_s = defaults.supervisor.fault_after_s;
   c.extrinsics.sensor_xyz[0] = 1.2;
   c.extrinsics.sensor_xyz[2] = 1.55;
   c.extrinsics.sensor_rpy_deg[1] = 3.0;

@@ -303,7 +303,8 @@ cameras:
 TEST(Config, PoseFilter) {
   auto c = parse_config(
       "model: m\nsource: {replay: {path: d}}\nsanity:\n  filter: {enabled: true, "
-      "distance_noise: 0.1, max_radius_m: 10, confirm: 3, position_sigma_scale: 0.6}\n",
+      "distance_noise: 0.1, max_radius_m: 10, confirm: 3, position_sigma_scale: 0.6,\n"
+      "    estimate_max_radius_m: 120, estimate_max_yaw_deg: 25, estimate_sigma_scale: 0.35}\n",
       "test.yaml");
   ASSERT_TRUE(c) << c.error().message();
   EXPECT_TRUE(c->sanity.filter.enabled);
@@ -311,6 +312,12 @@ TEST(Config, PoseFilter) {
   EXPECT_EQ(c->sanity.filter.max_radius_m, 10.0);
   EXPECT_EQ(c->sanity.filter.confirm, 3);
   EXPECT_EQ(c->sanity.filter.position_sigma_scale, 0.6);
+  EXPECT_EQ(c->sanity.filter.estimate_max_radius_m, 120.0);
+  EXPECT_EQ(c->sanity.filter.estimate_max_yaw_deg, 25.0);
+  EXPECT_EQ(c->sanity.filter.estimate_sigma_scale, 0.35);
+  expect_refused(
+      "model: m\nsource: {replay: {path: d}}\nsanity: {filter: {estimate_sigma_scale: 0}}\n",
+      "estimate_sigma_scale");
   EXPECT_FALSE(parse_config("model: m\nsource: {replay: {path: d}}\n", "t")->sanity.filter.enabled);
   // A live camera needs the vehicle's odometry from the bus (odometry.source dds).
   expect_refused("model: m\nsource: {type: v4l2}\nsanity: {filter: {enabled: true}}\n",

@@ -8,8 +8,8 @@
 #       +-0.3 m in height, +-3 deg in pitch, +-10 deg in yaw        (~28 600 frames)
 #   train_route{26,27,28,29}_{day,overcast,morning,noon}  four more routes, every
 #       frame a milder perturbed view (+-1 m, +-0.2 m, +-2 deg, +-6 deg): added for
-#       the fourth continued run (docs/evaluation.md; its model is
-#       model_bin/town_64_candidate.aprt, not yet the shipped one)
+#       the fourth continued run (docs/evaluation.md; its model is the
+#       shipped model_bin/town_64.aprt)
 #   val_haze   a separate 600 m drive under a light no training drive has (validation)
 #   val_route12_morning  a second validation drive: route seed 12, morning light
 #   val_route13_dusk     a third: route seed 13, dusk light
