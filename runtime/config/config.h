@@ -214,8 +214,7 @@ struct Config {
       double position_sigma_scale = 1.0;    // published position sigma = the filter's x this
       double estimate_max_radius_m = 60.0;  // the model's 95 % radius an estimate taken may state
       double estimate_max_yaw_deg = 30.0;   // ... and its 95 % yaw half-interval
-      double estimate_sigma_scale =
-          1.0;  // an estimate's position sigma as weighed = the model's x this
+      double estimate_sigma_scale = 1.0;    // an estimate's position sigma as weighed: x this
     } filter;
   } sanity;
 
