@@ -32,7 +32,8 @@ endif()
 if(TARGET aprt_dds_module)
   install(TARGETS aprt_dds_module LIBRARY DESTINATION lib/aprt COMPONENT runtime)
 endif()
-install(FILES config/default.yaml config/autoware.yaml config/aprt_pose.dbc config/aprt.service
+install(FILES config/default.yaml config/autoware.yaml config/aprt_pose.dbc
+              config/vehicle_odometry_example.dbc config/aprt.service
         DESTINATION ${APRT_INSTALL_DATADIR}/config COMPONENT runtime)
 install(DIRECTORY config/idl DESTINATION ${APRT_INSTALL_DATADIR}/config COMPONENT runtime)
 # (A candidate model not yet shipped, model_bin/*_candidate.aprt, stays out.)

@@ -5,8 +5,8 @@
     kernels             <- base
     runtime/engine      <- base, kernels
     drivers             <- base (drivers/input and drivers/output never use each
-                           other; both may use drivers/codec, drivers/dds,
-                           drivers/module and drivers/watchdog)
+                           other; both may use drivers/can, drivers/codec,
+                           drivers/dds, drivers/module, drivers/watchdog)
     the application     <- all of the above: runtime/config, runtime/pose,
                            runtime/loop, runtime/cli
 
@@ -26,6 +26,7 @@ LAYERS = [
     ("drivers/input/", "drivers/input"),
     ("drivers/output/", "drivers/output"),
     ("drivers/codec/", "drivers/shared"),
+    ("drivers/can/", "drivers/shared"),
     ("drivers/dds/", "drivers/shared"),
     ("drivers/watchdog/", "drivers/shared"),
     ("drivers/module/", "drivers/shared"),

@@ -39,7 +39,7 @@ dpkg-deb -I "$deb" conffiles | grep -qx /etc/aprt/aprt.yaml || fail "$deb: /etc/
 contents=$(dpkg-deb -c "$deb"; dpkg-deb -c "$dev")
 for path in ./usr/bin/aprt ./etc/aprt/aprt.yaml ./usr/lib/systemd/system/aprt.service \
   ./usr/share/aprt/config/default.yaml ./usr/share/aprt/config/autoware.yaml \
-  ./usr/share/aprt/config/aprt_pose.dbc \
+  ./usr/share/aprt/config/aprt_pose.dbc ./usr/share/aprt/config/vehicle_odometry_example.dbc \
   ./usr/share/aprt/config/idl/ros2_interfaces.idl ./usr/share/aprt/model_bin/town_64.aprt \
   ./usr/share/aprt/data/demo_drive/poses.txt ./usr/include/aprt/runtime/engine/engine.h \
   ./usr/share/doc/aprt/README.md; do

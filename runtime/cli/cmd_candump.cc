@@ -14,10 +14,10 @@
 #include <ctime>
 #include <string>
 
+#include "drivers/can/dbc.h"
+#include "drivers/can/socketcan.h"
 #include "drivers/output/can/candump_log.h"
-#include "drivers/output/can/dbc.h"
 #include "drivers/output/can/pose_can_codec.h"
-#include "drivers/output/can/socketcan.h"
 #include "runtime/base/angles.h"
 #include "runtime/base/file_io.h"
 #include "runtime/cli/args.h"

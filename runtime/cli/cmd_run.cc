@@ -159,6 +159,7 @@ int cmd_run(int argc, char** argv) {
   const std::string base = config_path ? directory_of(config_path) : data_dir();
   cfg.model = resolve(model ? model : cfg.model, model ? "." : base);
   cfg.model_signing.public_key = resolve(cfg.model_signing.public_key, base);
+  cfg.odometry.can.dbc = resolve(cfg.odometry.can.dbc, base);
   // A second sensor (fusion.companion): its own configuration, its paths
   // relative to itself.
   Config companion;

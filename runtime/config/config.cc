@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <initializer_list>
 
 #include "runtime/base/file_io.h"
@@ -394,19 +395,45 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
 
     const Node* od = root->get("odometry");
     Config::Odometry& o = c.odometry;
-    APRT_TRY(
-        r.map(od, "odometry", {"source", "topic", "domain", "reliable", "loopback_only", "depth"}));
+    APRT_TRY(r.map(od, "odometry",
+                   {"source", "topic", "domain", "reliable", "loopback_only", "depth", "can"}));
     APRT_TRY(r.str(od, "odometry", "source", &o.source));
     APRT_TRY(r.str(od, "odometry", "topic", &o.topic));
     APRT_TRY(r.integer(od, "odometry", "domain", 0, 232, &o.domain));
     APRT_TRY(r.boolean(od, "odometry", "reliable", &o.reliable));
     APRT_TRY(r.boolean(od, "odometry", "loopback_only", &o.loopback_only));
     APRT_TRY(r.integer(od, "odometry", "depth", 1, 1000, &o.depth));
-    if (o.source != "replay" && o.source != "dds") {
+    if (o.source != "replay" && o.source != "dds" && o.source != "can") {
       return Error(Errc::kInvalidArgument,
                    "%s: odometry.source: '%s' is not one of replay (a replayed drive's "
-                   "odometry.txt), dds (a TwistWithCovarianceStamped topic)",
+                   "odometry.txt), dds (a TwistWithCovarianceStamped topic), can (the vehicle's "
+                   "speed and yaw-rate signals)",
                    origin.c_str(), o.source.c_str());
+    }
+    const Node* oc = od ? od->get("can") : nullptr;
+    APRT_TRY(r.map(oc, "odometry.can",
+                   {"interface", "dbc", "speed", "yaw_rate", "speed_unit", "yaw_rate_unit",
+                    "yaw_rate_clockwise", "max_pair_age_ms"}));
+    APRT_TRY(r.str(oc, "odometry.can", "interface", &o.can.interface));
+    APRT_TRY(r.str(oc, "odometry.can", "dbc", &o.can.dbc));
+    APRT_TRY(r.str(oc, "odometry.can", "speed", &o.can.speed));
+    APRT_TRY(r.str(oc, "odometry.can", "yaw_rate", &o.can.yaw_rate));
+    APRT_TRY(r.str(oc, "odometry.can", "speed_unit", &o.can.speed_unit));
+    APRT_TRY(r.str(oc, "odometry.can", "yaw_rate_unit", &o.can.yaw_rate_unit));
+    APRT_TRY(r.boolean(oc, "odometry.can", "yaw_rate_clockwise", &o.can.yaw_rate_clockwise));
+    APRT_TRY(r.integer(oc, "odometry.can", "max_pair_age_ms", 1, 10000, &o.can.max_pair_age_ms));
+    if (o.source == "can") {
+      for (const auto& [key, value] :
+           {std::pair<const char*, const std::string*>{"dbc", &o.can.dbc},
+            {"speed", &o.can.speed},
+            {"yaw_rate", &o.can.yaw_rate}}) {
+        if (value->empty()) {
+          return Error(Errc::kInvalidArgument, "%s: odometry.source can needs odometry.can.%s (%s)",
+                       origin.c_str(), key,
+                       std::strcmp(key, "dbc") == 0 ? "the vehicle's DBC file"
+                                                    : "MESSAGE.SIGNAL of the DBC that carries it");
+        }
+      }
     }
 
     const Node* th = root->get("threads");
@@ -445,7 +472,8 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
       return Error(Errc::kInvalidArgument,
                    "%s: sanity.filter needs the vehicle's odometry: with odometry.source replay "
                    "only a replayed drive's odometry.txt gives it (source.type is %s); set "
-                   "odometry.source: dds for the vehicle's twist topic, or disable the filter",
+                   "odometry.source: dds for the vehicle's twist topic or can for its bus "
+                   "signals, or disable the filter",
                    origin.c_str(), source_type_name(trigger.type));
     }
     if (!c.fusion.companion.empty()) {

@@ -221,13 +221,23 @@ struct Config {
   // Where the pose filter (sanity.filter) gets the vehicle's motion.
   struct Odometry {
     // replay: a replayed drive's odometry.txt; dds: a ROS 2 topic of
-    // geometry_msgs/msg/TwistWithCovarianceStamped (drivers/input/twist/).
+    // geometry_msgs/msg/TwistWithCovarianceStamped (drivers/input/twist/);
+    // can: the vehicle's speed and yaw-rate signals on its CAN bus, located
+    // by its DBC file (drivers/input/can_odometry/).
     std::string source = "replay";
     std::string topic = "/sensing/vehicle_velocity_converter/twist_with_covariance";
     int domain = 0;
     bool reliable = true;
     bool loopback_only = false;
     int depth = 50;
+    struct Can {
+      std::string interface = "can0";
+      std::string dbc;                        // the vehicle's DBC file
+      std::string speed, yaw_rate;            // "MESSAGE.SIGNAL"
+      std::string speed_unit, yaw_rate_unit;  // "": the DBC's
+      bool yaw_rate_clockwise = false;
+      int max_pair_age_ms = 100;
+    } can;
   } odometry;
 
   struct Threads {

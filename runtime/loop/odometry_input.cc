@@ -2,6 +2,7 @@
 
 #include <new>
 
+#include "drivers/input/can_odometry/can_odometry.h"
 #include "runtime/base/clock.h"
 #include "runtime/loop/rt_thread.h"
 
@@ -10,16 +11,32 @@ namespace aprt {
 Expected<std::unique_ptr<OdometryInput>> OdometryInput::create(const Config::Odometry& c) {
   std::unique_ptr<OdometryInput> in(new (std::nothrow) OdometryInput());
   if (!in) return Error(Errc::kOutOfMemory, "odometry: out of memory");
-  TwistOptions o;
-  o.domain = uint32_t(c.domain);
-  o.topic = c.topic;
-  o.reliable = c.reliable;
-  o.loopback_only = c.loopback_only;
-  o.depth = c.depth;
-  auto r = TwistReader::create(o);
-  if (!r) return Error(r.error().code(), "odometry: %s", r.error().message());
-  in->reader_ = std::move(r.value());
-  in->topic_ = c.topic;
+  if (c.source == "can") {
+    CanOdometryOptions o;
+    o.interface = c.can.interface;
+    o.dbc = c.can.dbc;
+    o.speed = c.can.speed;
+    o.yaw_rate = c.can.yaw_rate;
+    o.speed_unit = c.can.speed_unit;
+    o.yaw_rate_unit = c.can.yaw_rate_unit;
+    o.yaw_rate_clockwise = c.can.yaw_rate_clockwise;
+    o.max_pair_age_ms = c.can.max_pair_age_ms;
+    auto r = CanTwistReader::create(o);
+    if (!r) return r.error();
+    in->description_ = "can " + c.can.interface + " " + r.value()->description();
+    in->reader_ = std::move(r.value());
+  } else {
+    TwistOptions o;
+    o.domain = uint32_t(c.domain);
+    o.topic = c.topic;
+    o.reliable = c.reliable;
+    o.loopback_only = c.loopback_only;
+    o.depth = c.depth;
+    auto r = TwistReader::create(o);
+    if (!r) return Error(r.error().code(), "odometry: %s", r.error().message());
+    in->reader_ = std::move(r.value());
+    in->description_ = "dds " + c.topic;
+  }
   // Normal scheduling: nothing waits for it, and it waits for the bus only;
   // the stack of the loop's threads that call into the DDS library.
   if (Status st = start_thread(

@@ -1,6 +1,8 @@
-// The vehicle's live odometry for the pose filter (odometry.source: dds): a
-// thread (aprt-odometry) takes the twists a ROS 2 topic carries
-// (drivers/input/twist/twist_reader.h) and hands them to the inference
+// The vehicle's live odometry for the pose filter (odometry.source: dds or
+// can): a thread (aprt-odometry) takes the twists a ROS 2 topic carries
+// (drivers/input/twist/twist_reader.h), or the speed and yaw rate the
+// vehicle's CAN bus carries (drivers/input/can_odometry/can_odometry.h,
+// the same TwistSamples), and hands them to the inference
 // thread through a lock-free queue; the inference thread integrates them
 // into its own OdometryTrack and asks it for the reading at each frame's
 // time. Neither thread waits for the other: a full queue drops (and counts)
@@ -23,7 +25,7 @@ namespace aprt {
 
 class OdometryInput {
  public:
-  // Opens the topic and starts the thread.
+  // Opens the topic or the CAN interface and starts the thread.
   static Expected<std::unique_ptr<OdometryInput>> create(const Config::Odometry& c);
   ~OdometryInput();
   OdometryInput(const OdometryInput&) = delete;
@@ -37,14 +39,15 @@ class OdometryInput {
   uint64_t refused() const { return refused_.load(std::memory_order_relaxed); }
   uint64_t dropped() const { return dropped_.load(std::memory_order_relaxed); }
   int publishers() const { return reader_->publishers(); }
-  const std::string& topic() const { return topic_; }
+  // "dds <topic>" or "can <interface> <speed signal> + <yaw-rate signal>".
+  const std::string& description() const { return description_; }
 
  private:
   OdometryInput() = default;
   void run() noexcept;
 
   std::unique_ptr<TwistReader> reader_;
-  std::string topic_;
+  std::string description_;
   SpscRing<TwistSample, 1024> queue_;
   std::atomic<bool> stop_{false};
   std::atomic<uint64_t> received_{0}, refused_{0}, dropped_{0};

@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "drivers/can/socketcan.h"
 #include "drivers/output/can/pose_can_sender.h"
-#include "drivers/output/can/socketcan.h"
 #include "runtime/config/config.h"
 #include "runtime/engine/model_file.h"
 #include "runtime/loop/pose_record.h"

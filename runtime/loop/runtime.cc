@@ -51,7 +51,7 @@ Expected<std::unique_ptr<Runtime>> Runtime::create(const Config& config, const C
     r->channel_ptrs_.push_back(ch.value().get());
     r->channels_.push_back(std::move(ch.value()));
   }
-  if (c.sanity.filter.enabled && c.odometry.source == "dds") {
+  if (c.sanity.filter.enabled && c.odometry.source != "replay") {
     auto od = OdometryInput::create(c.odometry);
     if (!od) return Error(od.error().code(), "run: %s", od.error().message());
     r->odometry_ = std::move(od.value());
@@ -416,9 +416,9 @@ int Runtime::run() {
     if (companion_) print_companion_summary();
     if (odometry_) {
       const auto u = [](uint64_t v) { return static_cast<unsigned long long>(v); };
-      std::printf("odometry: dds %s: %llu twists taken, %llu refused, %llu dropped (queue full)\n",
-                  odometry_->topic().c_str(), u(odometry_->received()), u(odometry_->refused()),
-                  u(odometry_->dropped()));
+      std::printf("odometry: %s: %llu samples taken, %llu refused, %llu dropped (queue full)\n",
+                  odometry_->description().c_str(), u(odometry_->received()),
+                  u(odometry_->refused()), u(odometry_->dropped()));
     }
     outputs_->print_summary();
   }

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "drivers/output/can/dbc.h"
+#include "drivers/can/dbc.h"
 #include "runtime/config/config.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -77,7 +77,7 @@ if [ -f "$build/lib/aprt/aprt_libcamera.so" ]; then
 fi
 for t in candump cansend; do copy_with_libs "/usr/bin/$t" /usr/bin; done
 copy_with_libs "$(command -v ip)" /usr/bin
-cp "$top/config/aprt_pose.dbc" "$root/aprt/config/"
+cp "$top/config/aprt_pose.dbc" "$top/config/vehicle_odometry_example.dbc" "$root/aprt/config/"
 cp "$here"/scenarios/*.sh "$here"/scenarios/*.yaml "$root/hil/" 2>/dev/null || true
 
 # A tiny model (untrained weights) and a short drive: the CAN path is what is under test.

@@ -10,7 +10,7 @@
 #include <random>
 #include <string>
 
-#include "drivers/output/can/dbc.h"
+#include "drivers/can/dbc.h"
 #include "drivers/output/can/pose_can_codec.h"
 #include "runtime/base/allocation_counter.h"
 

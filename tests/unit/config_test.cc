@@ -329,8 +329,30 @@ TEST(Config, PoseFilter) {
   ASSERT_TRUE(live) << live.error().message();
   EXPECT_EQ(live->odometry.topic, "/twist");
   EXPECT_EQ(live->odometry.domain, 3);
-  expect_refused("model: m\nsource: {replay: {path: d}}\nodometry: {source: can}\n",
-                 "odometry.source: 'can' is not one of");
+  expect_refused("model: m\nsource: {replay: {path: d}}\nodometry: {source: flexray}\n",
+                 "odometry.source: 'flexray' is not one of replay");
+  // The vehicle's own bus: its DBC and the two signals in it.
+  auto bus = parse_config(
+      "model: m\nsource: {type: v4l2}\nsanity: {filter: {enabled: true}}\n"
+      "odometry:\n  source: can\n  can: {interface: vcan0, dbc: car.dbc, speed: ESP.Speed,\n"
+      "        yaw_rate: ESP.Yaw, yaw_rate_unit: deg/s, yaw_rate_clockwise: true,\n"
+      "        max_pair_age_ms: 40}\n",
+      "test.yaml");
+  ASSERT_TRUE(bus) << bus.error().message();
+  EXPECT_EQ(bus->odometry.can.interface, "vcan0");
+  EXPECT_EQ(bus->odometry.can.dbc, "car.dbc");
+  EXPECT_EQ(bus->odometry.can.speed, "ESP.Speed");
+  EXPECT_EQ(bus->odometry.can.yaw_rate, "ESP.Yaw");
+  EXPECT_EQ(bus->odometry.can.speed_unit, "");
+  EXPECT_EQ(bus->odometry.can.yaw_rate_unit, "deg/s");
+  EXPECT_TRUE(bus->odometry.can.yaw_rate_clockwise);
+  EXPECT_EQ(bus->odometry.can.max_pair_age_ms, 40);
+  expect_refused("model: m\nsource: {type: v4l2}\nodometry: {source: can, can: {speed: A.B}}\n",
+                 "odometry.source can needs odometry.can.dbc (the vehicle's DBC file)");
+  expect_refused(
+      "model: m\nsource: {type: v4l2}\nodometry: {source: can, can: {dbc: x.dbc, speed: A.B}}\n",
+      "odometry.source can needs odometry.can.yaw_rate (MESSAGE.SIGNAL");
+  expect_refused("model: m\nsource: {type: v4l2}\nodometry: {can: {speeed: A.B}}\n", "speeed");
   expect_refused(
       "model: m\nsource: {replay: {path: d}}\nfusion: {companion: c.yaml}\n"
       "sanity: {filter: {enabled: true}}\n",

@@ -10,6 +10,8 @@
 #       frame a milder perturbed view (+-1 m, +-0.2 m, +-2 deg, +-6 deg): added for
 #       the fourth continued run (docs/evaluation.md; its model is the
 #       shipped model_bin/town_64.aprt)
+#   train_route{30,31,32,33}_{day,overcast,morning,noon}  four more such routes,
+#       added for the fifth continued run (docs/evaluation.md)
 #   val_haze   a separate 600 m drive under a light no training drive has (validation)
 #   val_route12_morning  a second validation drive: route seed 12, morning light
 #   val_route13_dusk     a third: route seed 13, dusk light
@@ -42,6 +44,10 @@ render train_route26_day      --split train --route-seed 26 --lighting day --vie
 render train_route27_overcast --split train --route-seed 27 --lighting overcast --view-jitter $mild
 render train_route28_morning  --split train --route-seed 28 --lighting morning --view-jitter $mild
 render train_route29_noon     --split train --route-seed 29 --lighting noon --view-jitter $mild
+render train_route30_day      --split train --route-seed 30 --lighting day --view-jitter $mild
+render train_route31_overcast --split train --route-seed 31 --lighting overcast --view-jitter $mild
+render train_route32_morning  --split train --route-seed 32 --lighting morning --view-jitter $mild
+render train_route33_noon     --split train --route-seed 33 --lighting noon --view-jitter $mild
 render val_haze   --split test --route-seed 11 --lighting haze --max-length 600
 render val_route12_morning --split test --route-seed 12 --lighting morning --max-length 600
 render val_route13_dusk --split test --route-seed 13 --lighting dusk --max-length 600

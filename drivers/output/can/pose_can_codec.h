@@ -9,14 +9,9 @@
 #include <cstddef>
 #include <cstdint>
 
-namespace aprt::can {
+#include "drivers/can/can_frame.h"
 
-struct Frame {
-  uint32_t id = 0;
-  uint8_t len = 0;
-  bool fd = false;
-  uint8_t data[64] = {};
-};
+namespace aprt::can {
 
 struct PoseSignals {
   uint8_t state = 0;   // RunState

@@ -10,8 +10,8 @@
 
 #include <cstdint>
 
+#include "drivers/can/socketcan.h"
 #include "drivers/output/can/pose_can_codec.h"
-#include "drivers/output/can/socketcan.h"
 
 namespace aprt::can {
 

@@ -1,4 +1,4 @@
-#include "drivers/output/can/socketcan.h"
+#include "drivers/can/socketcan.h"
 
 #include <linux/can.h>
 #include <linux/can/error.h>
@@ -94,6 +94,9 @@ Status SocketCan::bind_socket() noexcept {
   if (!receive_) {
     // The sender reads only error frames: no data frame is ever queued to it.
     setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, nullptr, 0);
+  } else if (Status st = apply_filter(fd); !st) {
+    close(fd);
+    return st;
   }
   const can_err_mask_t mask =
       CAN_ERR_TX_TIMEOUT | CAN_ERR_LOSTARB | CAN_ERR_CRTL | CAN_ERR_BUSOFF | CAN_ERR_RESTARTED;
@@ -114,6 +117,40 @@ Status SocketCan::bind_socket() noexcept {
   fd_ = fd;
   state_ = BusState::kActive;
   return ok();
+}
+
+Status SocketCan::apply_filter(int fd) const noexcept {
+  if (filter_count_ == 0) return ok();
+  can_filter f[kMaxFilterIds];
+  for (int i = 0; i < filter_count_; ++i) {
+    const uint32_t id = filter_ids_[i];
+    const bool extended = id > CAN_SFF_MASK;
+    // The frame format is part of the match: 0x123 standard is not 0x123 extended.
+    f[i].can_id = extended ? (id | CAN_EFF_FLAG) : id;
+    f[i].can_mask = (extended ? CAN_EFF_MASK : CAN_SFF_MASK) | CAN_EFF_FLAG | CAN_RTR_FLAG;
+  }
+  if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, f, socklen_t(sizeof f[0] * filter_count_)) != 0) {
+    const int e = errno;
+    return Error(Errc::kIo, "can: cannot set the receive filter on '%s': %s", interface_,
+                 std::strerror(e));
+  }
+  return ok();
+}
+
+Status SocketCan::set_filter(const uint32_t* ids, int n) noexcept {
+  if (n < 0 || n > kMaxFilterIds) {
+    return Error(Errc::kInvalidArgument, "can: %d receive ids (at most %d)", n, kMaxFilterIds);
+  }
+  for (int i = 0; i < n; ++i) filter_ids_[i] = ids[i];
+  filter_count_ = n;
+  if (fd_ < 0) return ok();  // applied when bound
+  if (filter_count_ == 0) {
+    // Everything again: the default filter (one rule taking every id).
+    can_filter all{0, 0};
+    setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, &all, sizeof all);
+    return ok();
+  }
+  return apply_filter(fd_);
 }
 
 SocketCan::~SocketCan() {

@@ -9,7 +9,7 @@
 #include <memory>
 #include <string>
 
-#include "drivers/output/can/pose_can_codec.h"
+#include "drivers/can/can_frame.h"
 #include "runtime/base/expected.h"
 
 namespace aprt::can {
@@ -61,6 +61,13 @@ class SocketCan final : public Channel {
   int read(Frame* f, int timeout_ms, int64_t* timestamp_ns) noexcept;
   static constexpr uint32_t kErrorFrameFlag = 0x20000000u;
 
+  // A reader: the kernel queues only data frames with these ids (11-bit or
+  // 29-bit; at most kMaxFilterIds), so a busy bus does not wake the reader
+  // for frames it drops. Kept across reopen(). Call before open's result is
+  // used for reading; n = 0 takes every frame again.
+  static constexpr int kMaxFilterIds = 8;
+  Status set_filter(const uint32_t* ids, int n) noexcept;
+
   // Error-frame classes seen since open (cumulative).
   uint64_t bus_off_events = 0, passive_events = 0, warning_events = 0, restarted_events = 0;
   uint64_t lost_arbitration = 0, tx_timeouts = 0;
@@ -72,6 +79,9 @@ class SocketCan final : public Channel {
   int fd_ = -1;
   char interface_[16] = {};
   bool want_fd_ = false, receive_ = false;
+  uint32_t filter_ids_[kMaxFilterIds] = {};
+  int filter_count_ = 0;
+  Status apply_filter(int fd) const noexcept;
   BusState state_ = BusState::kActive;
 };
 

@@ -1,8 +1,11 @@
-// A reader for the subset of the DBC format aprt's pose file uses (BO_, SG_
-// with Intel/Motorola byte order, signed/unsigned, factor/offset, range,
-// unit; VAL_ tables). The decoder tool decodes frames with it, so what it
-// prints is what the DBC file says, not what the encoder assumes; the tests
-// cross-check the encoder against it. Offline use (it allocates).
+// A reader for the subset of the DBC format aprt's pose file and a vehicle's
+// odometry signals use (BO_, SG_ with Intel/Motorola byte order,
+// signed/unsigned, factor/offset, range, unit, multiplexer indicators; VAL_
+// tables); other sections (CM_, BA_, ...) are skipped. The decoder tool
+// decodes frames with it, so what it prints is what the DBC file says, not
+// what the encoder assumes; the tests cross-check the encoder against it.
+// Parsing allocates (start-up, offline tools); raw() and physical() do not:
+// the odometry reader (drivers/input/can_odometry) decodes with them live.
 #pragma once
 
 #include <cstdint>
@@ -21,10 +24,12 @@ struct DbcSignal {
   double factor = 1, offset = 0, min = 0, max = 0;
   std::string unit;
   std::map<int64_t, std::string> values;  // VAL_ table
+  bool multiplexor = false;               // "M": selects which multiplexed signals a frame carries
+  int mux_value = -1;  // "m<k>": present only when the multiplexor is k (-1: always)
 
   // Raw bits of the signal in `data` (length bytes valid).
-  uint64_t raw(const uint8_t* data, size_t length) const;
-  double physical(const uint8_t* data, size_t length) const;
+  uint64_t raw(const uint8_t* data, size_t length) const noexcept;
+  double physical(const uint8_t* data, size_t length) const noexcept;
 };
 
 struct DbcMessage {

@@ -1,4 +1,4 @@
-#include "drivers/output/can/dbc.h"
+#include "drivers/can/dbc.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -9,7 +9,7 @@
 
 namespace aprt::can {
 
-uint64_t DbcSignal::raw(const uint8_t* data, size_t bytes) const {
+uint64_t DbcSignal::raw(const uint8_t* data, size_t bytes) const noexcept {
   uint64_t v = 0;
   if (little_endian) {
     for (int i = 0; i < length; ++i) {
@@ -30,7 +30,7 @@ uint64_t DbcSignal::raw(const uint8_t* data, size_t bytes) const {
   return v;
 }
 
-double DbcSignal::physical(const uint8_t* data, size_t bytes) const {
+double DbcSignal::physical(const uint8_t* data, size_t bytes) const noexcept {
   const uint64_t r = raw(data, bytes);
   double v;
   if (is_signed && length < 64) {
@@ -109,22 +109,42 @@ Expected<Dbc> parse_dbc(const std::string& text, const std::string& origin) {
       current = &dbc.messages.back();
     } else if (body.rfind("SG_ ", 0) == 0) {
       if (!current) return bad(origin, lineno, "SG_ outside a BO_ block");
-      char name[128], order_sign[4], unit[64] = "";
+      // SG_ name [M|m<k>] : start|length@order sign (factor,offset) [min|max] "unit" receivers
+      const size_t colon = body.find(':');
+      if (colon == std::string::npos) {
+        return bad(origin, lineno, "malformed SG_ line (no ':' after the signal's name)");
+      }
+      std::istringstream head(body.substr(4, colon - 4));
+      std::string name, mux, extra;
+      head >> name >> mux >> extra;
+      int mux_value = -1;
+      bool multiplexor = false;
+      if (mux == "M") {
+        multiplexor = true;
+      } else if (mux.size() >= 2 && mux[0] == 'm') {
+        char* end = nullptr;
+        const long v = std::strtol(mux.c_str() + 1, &end, 10);
+        // "m3M": a multiplexed multiplexor (extended multiplexing): taken as multiplexed.
+        if (end == mux.c_str() + 1 || v < 0 || (*end != '\0' && *end != 'M')) {
+          return bad(origin, lineno, "SG_ with a malformed multiplexer indicator (M or m<k>)");
+        }
+        mux_value = int(v);
+      } else if (!mux.empty()) {
+        return bad(origin, lineno, "SG_ with a malformed multiplexer indicator (M or m<k>)");
+      }
+      if (name.empty() || name.size() > 127 || !extra.empty()) {
+        return bad(origin, lineno, "malformed SG_ line (expected: SG_ name [M|m<k>] : ...)");
+      }
+      char order_sign[4], unit[64] = "";
       int start = 0, length = 0;
       double factor = 1, offset = 0, lo = 0, hi = 0;
-      // SG_ name : start|length@order sign (factor,offset) [min|max] "unit" receivers
       const int n =
-          std::sscanf(body.c_str(), "SG_ %127s : %d|%d@%3s (%lf,%lf) [%lf|%lf] \"%63[^\"]\"", name,
-                      &start, &length, order_sign, &factor, &offset, &lo, &hi, unit);
-      if (n < 8) {
+          std::sscanf(body.c_str() + colon, ": %d|%d@%3s (%lf,%lf) [%lf|%lf] \"%63[^\"]\"", &start,
+                      &length, order_sign, &factor, &offset, &lo, &hi, unit);
+      if (n < 7) {
         return bad(origin, lineno,
                    "malformed SG_ line (expected: SG_ name : start|length@order+/- (factor,offset) "
                    "[min|max] \"unit\" receivers)");
-      }
-      if (length < 1 || length > 64 || start < 0 || start >= 512 ||
-          (order_sign[0] != '0' && order_sign[0] != '1') ||
-          (order_sign[1] != '+' && order_sign[1] != '-')) {
-        return bad(origin, lineno, "SG_ with an impossible start, length, byte order or sign");
       }
       DbcSignal s;
       s.name = name;
@@ -136,7 +156,9 @@ Expected<Dbc> parse_dbc(const std::string& text, const std::string& origin) {
       s.offset = offset;
       s.min = lo;
       s.max = hi;
-      s.unit = n >= 9 ? unit : "";
+      s.unit = n >= 8 ? unit : "";
+      s.multiplexor = multiplexor;
+      s.mux_value = mux_value;
       if (s.little_endian && start + length > current->length * 8) {
         return bad(origin, lineno, "SG_ extends past the message's length");
       }
