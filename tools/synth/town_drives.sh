@@ -24,7 +24,7 @@
 #   test_mount_high  unseen route 24 by day, the camera mounted 0.25 m higher
 # Test drives are looked at once per shipped model; choices use the val_ drives
 # (the confidence is calibrated on val_haze, the validity gate chosen on the nine).
-# Deterministic; ~15 minutes on two cores, ~900 MB.
+# Deterministic; ~25 minutes on two cores, ~1.4 GB.
 #   tools/synth/town_drives.sh OUT [path/to/aprt_synth] [--only NAME]
 script=town_drives
 extra=""
