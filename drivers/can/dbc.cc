@@ -44,6 +44,15 @@ double DbcSignal::physical(const uint8_t* data, size_t bytes) const noexcept {
   return v * factor + offset;
 }
 
+int DbcSignal::bytes_spanned() const noexcept {
+  if (little_endian) return (start + length - 1) / 8 + 1;
+  // Motorola: from the most significant bit down and on to later bytes,
+  // so the last bit walked is in the last byte.
+  int bit = start;
+  for (int i = 1; i < length; ++i) bit = (bit % 8 == 0) ? bit + 15 : bit - 1;
+  return bit / 8 + 1;
+}
+
 const DbcSignal* DbcMessage::signal(const std::string& n) const {
   for (const auto& s : signals) {
     if (s.name == n) return &s;
@@ -159,7 +168,7 @@ Expected<Dbc> parse_dbc(const std::string& text, const std::string& origin) {
       s.unit = n >= 8 ? unit : "";
       s.multiplexor = multiplexor;
       s.mux_value = mux_value;
-      if (s.little_endian && start + length > current->length * 8) {
+      if (s.bytes_spanned() > current->length) {
         return bad(origin, lineno, "SG_ extends past the message's length");
       }
       current->signals.push_back(s);

@@ -30,6 +30,8 @@ struct DbcSignal {
   // Raw bits of the signal in `data` (length bytes valid).
   uint64_t raw(const uint8_t* data, size_t length) const noexcept;
   double physical(const uint8_t* data, size_t length) const noexcept;
+  // Bytes a frame must have to carry every bit of the signal (either byte order).
+  int bytes_spanned() const noexcept;
 };
 
 struct DbcMessage {

@@ -138,19 +138,12 @@ Status SocketCan::apply_filter(int fd) const noexcept {
 }
 
 Status SocketCan::set_filter(const uint32_t* ids, int n) noexcept {
-  if (n < 0 || n > kMaxFilterIds) {
-    return Error(Errc::kInvalidArgument, "can: %d receive ids (at most %d)", n, kMaxFilterIds);
+  if (n < 1 || n > kMaxFilterIds) {
+    return Error(Errc::kInvalidArgument, "can: %d receive ids (1 to %d)", n, kMaxFilterIds);
   }
   for (int i = 0; i < n; ++i) filter_ids_[i] = ids[i];
   filter_count_ = n;
-  if (fd_ < 0) return ok();  // applied when bound
-  if (filter_count_ == 0) {
-    // Everything again: the default filter (one rule taking every id).
-    can_filter all{0, 0};
-    setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, &all, sizeof all);
-    return ok();
-  }
-  return apply_filter(fd_);
+  return fd_ < 0 ? ok() : apply_filter(fd_);  // else applied when bound
 }
 
 SocketCan::~SocketCan() {

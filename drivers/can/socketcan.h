@@ -62,9 +62,8 @@ class SocketCan final : public Channel {
   static constexpr uint32_t kErrorFrameFlag = 0x20000000u;
 
   // A reader: the kernel queues only data frames with these ids (11-bit or
-  // 29-bit; at most kMaxFilterIds), so a busy bus does not wake the reader
-  // for frames it drops. Kept across reopen(). Call before open's result is
-  // used for reading; n = 0 takes every frame again.
+  // 29-bit; 1 to kMaxFilterIds), so a busy bus does not wake the reader for
+  // frames it would drop. Kept across reopen().
   static constexpr int kMaxFilterIds = 8;
   Status set_filter(const uint32_t* ids, int n) noexcept;
 

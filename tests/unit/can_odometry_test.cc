@@ -273,6 +273,12 @@ TEST(CanOdometry, MultiplexedSignalsParseAndMalformedIndicatorsAreRefused) {
   EXPECT_TRUE(m->signal("Mode")->multiplexor);
   EXPECT_EQ(m->signal("Muxed")->mux_value, 1);
   EXPECT_EQ(m->signal("YawRate")->mux_value, -1);
+  // A Motorola signal running past its message is refused as an Intel one is.
+  auto past = can::parse_dbc("BO_ 1 A: 1 X\n SG_ S : 7|16@0+ (1,0) [0|1] \"\" X\n", "past.dbc");
+  ASSERT_FALSE(past);
+  EXPECT_NE(std::string(past.error().message()).find("past.dbc:2: SG_ extends past"),
+            std::string::npos)
+      << past.error().message();
   auto bad = can::parse_dbc("BO_ 1 A: 8 X\n SG_ S mx : 0|8@1+ (1,0) [0|1] \"\" X\n", "bad.dbc");
   ASSERT_FALSE(bad);
   EXPECT_NE(std::string(bad.error().message()).find("bad.dbc:2: SG_ with a malformed multiplexer"),

@@ -21,17 +21,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int64_t kReopenEveryNs = 1000000000;
 constexpr int64_t kAliveNs = 1000000000;
 
-// Bytes a frame must carry for every bit of the signal.
-int bytes_needed(const can::DbcSignal& s) {
-  if (s.little_endian) return (s.start + s.length - 1) / 8 + 1;
-  int bit = s.start, last = bit;
-  for (int i = 0; i < s.length; ++i) {
-    if (bit > last) last = bit;
-    bit = (bit % 8 == 0) ? bit + 15 : bit - 1;
-  }
-  return last / 8 + 1;
-}
-
 // "MESSAGE.SIGNAL" in the DBC, or an error that says what is there.
 Expected<const can::DbcSignal*> find_signal(const can::Dbc& dbc, const std::string& path,
                                             const char* key, const std::string& origin,
@@ -111,8 +100,8 @@ Expected<CanOdometryDecoder> CanOdometryDecoder::create(const can::Dbc& dbc,
   d.yaw_ = *yaw.value();
   d.speed_id_ = speed_msg->id;
   d.yaw_id_ = yaw_msg->id;
-  d.speed_bytes_ = bytes_needed(d.speed_);
-  d.yaw_bytes_ = bytes_needed(d.yaw_);
+  d.speed_bytes_ = d.speed_.bytes_spanned();
+  d.yaw_bytes_ = d.yaw_.bytes_spanned();
   const std::string su = o.speed_unit.empty() ? d.speed_.unit : o.speed_unit;
   const std::string yu = o.yaw_rate_unit.empty() ? d.yaw_.unit : o.yaw_rate_unit;
   d.speed_scale_ = speed_unit_scale(su);
