@@ -95,7 +95,7 @@ int cmd_eval(int argc, char** argv) {
         "  DIR           camera: poses.txt + images (DeepLoc layout); LiDAR model (BEV\n"
         "                or points): lidar_poses.txt + scans (KITTI .bin or PCD), as\n"
         "                aprt_synth --lidar\n"
-        "  --csv FILE    per-frame predictions, truth and errors\n"
+        "  --csv FILE    per-frame predictions, truth, errors and the published sigmas\n"
         "  --json        summary as one JSON object\n"
         "  --compare M2  also run model M2 (e.g. its int8 version) on the same input:\n"
         "                its errors side by side and its deviation from MODEL\n"
@@ -189,7 +189,8 @@ int cmd_eval(int argc, char** argv) {
                  "name,x,y,z,qw,qx,qy,qz,gt_x,gt_y,gt_z,gt_qw,gt_qx,gt_qy,gt_qz,"
                  "position_error_m,orientation_error_deg,flags,sigma_x_m,sigma_y_m,"
                  "sigma_yaw_deg,published_x,published_y,published_yaw_deg,"
-                 "published_position_error_m,published_orientation_error_deg\n");
+                 "published_position_error_m,published_orientation_error_deg,"
+                 "published_sigma_x_m,published_sigma_y_m,published_sigma_yaw_deg\n");
   }
   std::vector<size_t> frames;
   for (size_t i = size_t(start); i < inputs->size(); i += size_t(every)) {
@@ -277,13 +278,16 @@ int cmd_eval(int argc, char** argv) {
       std::fprintf(
           csv,
           "%s,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%u,"
-          "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+          "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
           f.name, p.position[0], p.position[1], p.position[2], p.orientation[0], p.orientation[1],
           p.orientation[2], p.orientation[3], f.position[0], f.position[1], f.position[2],
           f.orientation[0], f.orientation[1], f.orientation[2], f.orientation[3], pe, oe, all_flags,
           p.sigma_position_m[0], p.sigma_position_m[1], p.sigma_rotation_rad[2] * 180.0 / M_PI,
           out.position[0], out.position[1], quaternion_yaw(out.orientation) * 180.0 / M_PI,
-          smp.published_position_error_m, smp.published_orientation_error_deg);
+          smp.published_position_error_m, smp.published_orientation_error_deg,
+          out.has_sigma ? out.sigma_position_m[0] : -1.0,
+          out.has_sigma ? out.sigma_position_m[1] : -1.0,
+          out.has_sigma ? out.sigma_rotation_rad[2] * 180.0 / M_PI : -1.0);
     }
   }
   if (csv) std::fclose(csv);

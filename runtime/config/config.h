@@ -215,6 +215,7 @@ struct Config {
       double estimate_max_radius_m = 60.0;  // the model's 95 % radius an estimate taken may state
       double estimate_max_yaw_deg = 30.0;   // ... and its 95 % yaw half-interval
       double estimate_sigma_scale = 1.0;    // an estimate's position sigma as weighed: x this
+      int disagreement_frames = 0;  // estimates' mean disagreement in the covariance (0: off)
     } filter;
   } sanity;
 

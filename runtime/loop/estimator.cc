@@ -66,6 +66,7 @@ OdometryFilterParams odometry_filter_params(const Config& config, const ModelMet
   p.filter.lost_radius_m = f.lost_radius_m;
   p.filter.position_sigma_scale = f.position_sigma_scale;
   p.filter.estimate_sigma_scale = f.estimate_sigma_scale;
+  p.filter.disagreement_frames = f.disagreement_frames;
   p.usable_radius_m = f.estimate_max_radius_m;
   p.usable_yaw_deg = f.estimate_max_yaw_deg;
   fallback_sigma(config, meta, &p.fallback_sigma_m, &p.fallback_sigma_rad);

@@ -1,6 +1,7 @@
 #include "runtime/pose/pose_filter.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 
 #include "runtime/base/angles.h"
@@ -73,7 +74,7 @@ void PoseFilter::predict(State* k, const PlanarMotion& m) const noexcept {
 }
 
 double PoseFilter::innovation(const State& k, const PlanarPose& z, bool update,
-                              State* out) noexcept {
+                              State* out) const noexcept {
   const Eigen::Map<const Mat3> P(k.P);
   Eigen::Vector3d v(z.x - k.s[0], z.y - k.s[1], wrap_angle(z.yaw - k.s[2]));
   Mat3 S = P;
@@ -97,6 +98,12 @@ double PoseFilter::innovation(const State& k, const PlanarPose& z, bool update,
   Pn = 0.5 * (Pn + Pn.transpose());
   Eigen::Map<Mat3>(out->P) = Pn;
   out->count = k.count + 1;
+  if (p_.disagreement_frames > 0) {
+    // A running mean over the first estimates, then exponential.
+    const double a = 1.0 / double(std::min(out->count - 1, p_.disagreement_frames));
+    out->d[0] += a * (v[0] - out->d[0]);
+    out->d[1] += a * (v[1] - out->d[1]);
+  }
   return d2;
 }
 
@@ -106,14 +113,22 @@ PoseFilter::Output PoseFilter::output(const State& k, uint32_t flags) const noex
   o.pose.x = k.s[0];
   o.pose.y = k.s[1];
   o.pose.yaw = k.s[2];
-  o.pose.sigma_x = std::sqrt(k.P[0]) * p_.position_sigma_scale;
-  o.pose.sigma_y = std::sqrt(k.P[4]) * p_.position_sigma_scale;
+  // Validity takes the filter's own covariance; the published one scales its
+  // position part (the estimates' stated sigmas overstate the errors of the
+  // ones taken). Both add the estimates' mean disagreement with the filter,
+  // an offset measured in metres, unscaled (zero unless disagreement_frames).
+  const double s2 = p_.position_sigma_scale * p_.position_sigma_scale;
+  const double dxx = k.d[0] * k.d[0], dxy = k.d[0] * k.d[1], dyy = k.d[1] * k.d[1];
+  const double own[9] = {k.P[0] + dxx, k.P[1] + dxy, 0, k.P[3] + dxy, k.P[4] + dyy};
+  const double pub[9] = {k.P[0] * s2 + dxx, k.P[1] * s2 + dxy, 0, k.P[3] * s2 + dxy,
+                         k.P[4] * s2 + dyy};
+  o.pose.sigma_x = std::sqrt(pub[0]);
+  o.pose.sigma_y = std::sqrt(pub[4]);
   o.pose.sigma_yaw = std::sqrt(k.P[8]);
-  o.cov_xy = k.P[1] * p_.position_sigma_scale * p_.position_sigma_scale;
+  o.cov_xy = pub[1];
   const double yaw95 = kZ95 * o.pose.sigma_yaw * 180.0 / kPiRad;
-  if (!(radius95(k.P) <= p_.max_radius_m) || !(yaw95 <= p_.max_yaw_deg)) flags |= kPoseUncertain;
-  // As published: the position sigma scaled (validity takes the filter's own).
-  o.radius95_m = radius95(k.P) * p_.position_sigma_scale;
+  if (!(radius95(own) <= p_.max_radius_m) || !(yaw95 <= p_.max_yaw_deg)) flags |= kPoseUncertain;
+  o.radius95_m = radius95(pub);
   o.yaw95_deg = yaw95;
   o.flags = flags;
   return o;

@@ -55,6 +55,16 @@ struct PoseFilterParams {
   // the wrong-street ones included; the filter refuses those at its gate, so
   // the ones it takes are overstated by that tail (calibrated on validation).
   double estimate_sigma_scale = 1.0;
+  // The time constant, in estimates taken, of the running mean of the
+  // estimates' disagreement with the filter (their innovations), whose outer
+  // product is added to the filter's position covariance (0: off). Why: the
+  // estimates' errors are correlated over many frames in places (a stretch of
+  // views the model places a few metres short), which a filter assuming
+  // independent estimates follows and then believes; unbiased estimates
+  // average to no disagreement, a filter that is off by b sees the estimates
+  // disagree by about -b on average, so the published covariance (and
+  // validity) take in what the estimates measure against it.
+  int disagreement_frames = 0;
 };
 
 // A planar estimate of base_link in the map with one standard deviation per axis.
@@ -94,10 +104,11 @@ class PoseFilter {
     double s[3] = {};  // x, y, yaw
     double P[9] = {};  // row-major covariance
     int count = 0;     // estimates taken (0: empty)
+    double d[2] = {};  // running mean of the position innovations taken (disagreement_frames)
   };
   void predict(State* k, const PlanarMotion& m) const noexcept;
   // The estimate's Mahalanobis distance^2 from k; with `update`, k takes it.
-  static double innovation(const State& k, const PlanarPose& z, bool update, State* out) noexcept;
+  double innovation(const State& k, const PlanarPose& z, bool update, State* out) const noexcept;
   static State start(const PlanarPose& z) noexcept;
   Output output(const State& k, uint32_t flags) const noexcept;
 
