@@ -15,8 +15,8 @@ constexpr double kZ95 = 1.959963984540054;
 
 using Mat3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
 
-double radius95(const double* P) noexcept {
-  const double a = P[0], b = P[1], c = P[4];
+// The 95 % radius of a horizontal covariance [[a, b], [b, c]].
+double radius95(double a, double b, double c) noexcept {
   const double lmax = 0.5 * (a + c) + std::sqrt(0.25 * (a - c) * (a - c) + b * b);
   return kChi2Sqrt95 * std::sqrt(std::fmax(lmax, 0.0));
 }
@@ -119,16 +119,15 @@ PoseFilter::Output PoseFilter::output(const State& k, uint32_t flags) const noex
   // an offset measured in metres, unscaled (zero unless disagreement_frames).
   const double s2 = p_.position_sigma_scale * p_.position_sigma_scale;
   const double dxx = k.d[0] * k.d[0], dxy = k.d[0] * k.d[1], dyy = k.d[1] * k.d[1];
-  const double own[9] = {k.P[0] + dxx, k.P[1] + dxy, 0, k.P[3] + dxy, k.P[4] + dyy};
-  const double pub[9] = {k.P[0] * s2 + dxx, k.P[1] * s2 + dxy, 0, k.P[3] * s2 + dxy,
-                         k.P[4] * s2 + dyy};
-  o.pose.sigma_x = std::sqrt(pub[0]);
-  o.pose.sigma_y = std::sqrt(pub[4]);
+  const double xx = k.P[0] * s2 + dxx, xy = k.P[1] * s2 + dxy, yy = k.P[4] * s2 + dyy;
+  o.pose.sigma_x = std::sqrt(xx);
+  o.pose.sigma_y = std::sqrt(yy);
   o.pose.sigma_yaw = std::sqrt(k.P[8]);
-  o.cov_xy = pub[1];
+  o.cov_xy = xy;
   const double yaw95 = kZ95 * o.pose.sigma_yaw * 180.0 / kPiRad;
-  if (!(radius95(own) <= p_.max_radius_m) || !(yaw95 <= p_.max_yaw_deg)) flags |= kPoseUncertain;
-  o.radius95_m = radius95(pub);
+  const double own95 = radius95(k.P[0] + dxx, k.P[1] + dxy, k.P[4] + dyy);
+  if (!(own95 <= p_.max_radius_m) || !(yaw95 <= p_.max_yaw_deg)) flags |= kPoseUncertain;
+  o.radius95_m = radius95(xx, xy, yy);
   o.yaw95_deg = yaw95;
   o.flags = flags;
   return o;
@@ -184,7 +183,8 @@ PoseFilter::Output PoseFilter::step(const PlanarMotion* motion,
       }
     }
   }
-  if (fix_.count > 0 && radius95(fix_.P) > p_.lost_radius_m) fix_ = State{};
+  if (fix_.count > 0 && radius95(fix_.P[0], fix_.P[1], fix_.P[4]) > p_.lost_radius_m)
+    fix_ = State{};
   Output o;
   if (fix_.count > 0) {
     o = output(fix_, 0);

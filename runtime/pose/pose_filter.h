@@ -21,7 +21,8 @@
 //     `take_over_after` refusals in a row (a relocalisation).
 // A pose is valid when the filter has a fix and its own 95 % horizontal
 // radius and yaw interval are within the limits: the covariance published is
-// the filter's, not the single estimate's.
+// the filter's, not the single estimate's, with the estimates' mean
+// disagreement with it added (disagreement_frames).
 //
 // Pure, allocation-free, fixed-size state: the loop's estimator and `aprt
 // eval` run the same filter over the same estimates.
