@@ -8,8 +8,10 @@
 #include <string>
 #include <vector>
 
+#include "drivers/input/can_odometry/can_odometry.h"
 #include "runtime/base/expected.h"
 #include "runtime/config/fault_spec.h"
+#include "runtime/pose/pose_filter.h"
 
 namespace aprt {
 
@@ -200,22 +202,11 @@ struct Config {
     // covariance. It chooses its measurements with its own limits on the
     // model's stated confidence (the track's stay strict for a run without
     // odometry, where the gate alone decides).
-    struct Filter {
-      bool enabled = false;
-      double distance_noise = 0.05;         // odometry: of the distance travelled (1 sigma)
-      double yaw_noise_deg_per_m = 0.5;     // odometry: heading per metre travelled
-      double yaw_rate_noise_dps = 0.2;      // odometry: heading per second
-      double gate_chi2 = 11.34;             // an estimate's Mahalanobis distance^2 (3 dof)
-      int confirm = 4;                      // agreeing estimates that start a fix
-      int take_over_after = 25;             // refusals in a row before another run takes over
-      double max_radius_m = 8.0;            // the filter's 95 % radius to publish valid
-      double max_yaw_deg = 5.0;             // the filter's 95 % yaw half-interval to publish valid
-      double lost_radius_m = 100.0;         // beyond: the fix is dropped
-      double position_sigma_scale = 1.0;    // published position sigma = the filter's x this
+    // The pose filter's own parameters (runtime/pose/pose_filter.h) and the
+    // limits on the model's estimates it takes at all.
+    struct Filter : PoseFilterParams {
       double estimate_max_radius_m = 60.0;  // the model's 95 % radius an estimate taken may state
       double estimate_max_yaw_deg = 30.0;   // ... and its 95 % yaw half-interval
-      double estimate_sigma_scale = 1.0;    // an estimate's position sigma as weighed: x this
-      int disagreement_frames = 0;  // estimates' mean disagreement in the covariance (0: off)
     } filter;
   } sanity;
 
@@ -231,14 +222,7 @@ struct Config {
     bool reliable = true;
     bool loopback_only = false;
     int depth = 50;
-    struct Can {
-      std::string interface = "can0";
-      std::string dbc;                        // the vehicle's DBC file
-      std::string speed, yaw_rate;            // "MESSAGE.SIGNAL"
-      std::string speed_unit, yaw_rate_unit;  // "": the DBC's
-      bool yaw_rate_clockwise = false;
-      int max_pair_age_ms = 100;
-    } can;
+    CanOdometryOptions can;  // drivers/input/can_odometry/can_odometry.h
   } odometry;
 
   struct Threads {

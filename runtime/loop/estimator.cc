@@ -54,21 +54,9 @@ PoseGateParams pose_gate_params(const Config& config) {
 OdometryFilterParams odometry_filter_params(const Config& config, const ModelMeta& meta) {
   const Config::Sanity::Filter& f = config.sanity.filter;
   OdometryFilterParams p;
-  p.filter.enabled = f.enabled;
-  p.filter.distance_noise = f.distance_noise;
-  p.filter.yaw_noise_deg_per_m = f.yaw_noise_deg_per_m;
-  p.filter.yaw_rate_noise_dps = f.yaw_rate_noise_dps;
-  p.filter.gate_chi2 = f.gate_chi2;
-  p.filter.confirm = f.confirm;
-  p.filter.take_over_after = f.take_over_after;
-  p.filter.max_radius_m = f.max_radius_m;
-  p.filter.max_yaw_deg = f.max_yaw_deg;
-  p.filter.lost_radius_m = f.lost_radius_m;
-  p.filter.position_sigma_scale = f.position_sigma_scale;
-  p.filter.estimate_sigma_scale = f.estimate_sigma_scale;
-  p.filter.disagreement_frames = f.disagreement_frames;
-  p.usable_radius_m = f.estimate_max_radius_m;
-  p.usable_yaw_deg = f.estimate_max_yaw_deg;
+  p.filter = f;  // the filter's own part
+  p.estimate_max_radius_m = f.estimate_max_radius_m;
+  p.estimate_max_yaw_deg = f.estimate_max_yaw_deg;
   fallback_sigma(config, meta, &p.fallback_sigma_m, &p.fallback_sigma_rad);
   return p;
 }

@@ -12,16 +12,7 @@ Expected<std::unique_ptr<OdometryInput>> OdometryInput::create(const Config::Odo
   std::unique_ptr<OdometryInput> in(new (std::nothrow) OdometryInput());
   if (!in) return Error(Errc::kOutOfMemory, "odometry: out of memory");
   if (c.source == "can") {
-    CanOdometryOptions o;
-    o.interface = c.can.interface;
-    o.dbc = c.can.dbc;
-    o.speed = c.can.speed;
-    o.yaw_rate = c.can.yaw_rate;
-    o.speed_unit = c.can.speed_unit;
-    o.yaw_rate_unit = c.can.yaw_rate_unit;
-    o.yaw_rate_clockwise = c.can.yaw_rate_clockwise;
-    o.max_pair_age_ms = c.can.max_pair_age_ms;
-    auto r = CanTwistReader::create(o);
+    auto r = CanTwistReader::create(c.can);
     if (!r) return r.error();
     in->description_ = "can " + c.can.interface + " " + r.value()->description();
     in->reader_ = std::move(r.value());

@@ -28,8 +28,8 @@ void OdometryFilter::reset() noexcept {
 FilteredPose OdometryFilter::step(const PoseEstimate& sensor, uint32_t flags,
                                   const PlanarMotion* motion) noexcept {
   const CameraEstimate base = camera_to_base(sensor, base_from_sensor_);
-  const bool usable =
-      flags == 0 && base.flags == 0 && confident(sensor, p_.usable_radius_m, p_.usable_yaw_deg);
+  const bool usable = flags == 0 && base.flags == 0 &&
+                      confident(sensor, p_.estimate_max_radius_m, p_.estimate_max_yaw_deg);
   PlanarPose z;
   if (usable) {
     z.x = base.position.x();

@@ -329,7 +329,7 @@ TEST(OdometryFilter, TracksASensorAheadOfBaseLink) {
 TEST(OdometryFilter, AFlaggedOrUnconfidentEstimateIsNoMeasurement) {
   OdometryFilterParams p;
   p.filter = params();
-  p.usable_radius_m = 10.0;
+  p.estimate_max_radius_m = 10.0;
   OdometryFilter f(p, Eigen::Isometry3d::Identity());
   const PlanarMotion m = step_motion();
   PoseEstimate e;
