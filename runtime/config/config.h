@@ -201,9 +201,8 @@ struct Config {
     // odometry, the published pose is the filter's, valid by its own
     // covariance. It chooses its measurements with its own limits on the
     // model's stated confidence (the track's stay strict for a run without
-    // odometry, where the gate alone decides).
-    // The pose filter's own parameters (runtime/pose/pose_filter.h) and the
-    // limits on the model's estimates it takes at all.
+    // odometry, where the gate alone decides): PoseFilterParams, and the two
+    // limits below on the estimates it takes at all.
     struct Filter : PoseFilterParams {
       double estimate_max_radius_m = 60.0;  // the model's 95 % radius an estimate taken may state
       double estimate_max_yaw_deg = 30.0;   // ... and its 95 % yaw half-interval
