@@ -69,7 +69,7 @@ case "${1:-}" in
     # The A72 has no dotprod: again every test whose kernels the CPU picks.
     # The reference kernels' golden runs and the PyTorch generation of the
     # golden data (native Python, the CPU's no matter) ran above; their
-    # files are reused (half this pass's time under qemu).
+    # files are reused.
     echo "== aarch64 tests as cortex-a72 (no dotprod): the CPU-picked paths"
     QEMU_CPU=cortex-a72 ctest --preset aarch64 -L "unit|kernels|golden" -E '\.(ref|generate|convert)$' \
       --fixture-exclude-setup '^golden_' --timeout 900

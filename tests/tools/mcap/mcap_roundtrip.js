@@ -79,5 +79,5 @@ if (!estimatesOnly) pa.forEach((x, i) => {
   if (stamp(x.header) !== stamp(y.header) || JSON.stringify(x.pose) !== JSON.stringify(y.pose)) fail(`published pose ${i} differs`);
 });
 console.log(`mcap_roundtrip: ${fa_.length} frames identical, ${ta.length} estimates identical bit for bit, ` +
-            (estimatesOnly ? `published poses not compared (${pa.length} vs ${pb.length})`
+            (estimatesOnly ? `published poses not compared (${pa_.length} vs ${pb_.length})`
                            : `${pa.length} published poses identical (${pa_.length - pa.length} vs ${pb_.length - pb.length} before the later start)`) + ` (${fa} -> ${fb})`);
