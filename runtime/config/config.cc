@@ -373,11 +373,12 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     const Node* fl = sa ? sa->get("filter") : nullptr;
     const char* fp = "sanity.filter";
     Config::Sanity::Filter& f = c.sanity.filter;
-    APRT_TRY(r.map(fl, fp,
-                   {"enabled", "distance_noise", "yaw_noise_deg_per_m", "yaw_rate_noise_dps",
-                    "gate_chi2", "confirm", "take_over_after", "max_radius_m", "max_yaw_deg",
-                    "lost_radius_m", "position_sigma_scale", "estimate_max_radius_m",
-                    "estimate_max_yaw_deg", "estimate_sigma_scale", "disagreement_frames"}));
+    APRT_TRY(r.map(
+        fl, fp,
+        {"enabled", "distance_noise", "yaw_noise_deg_per_m", "yaw_rate_noise_dps", "gate_chi2",
+         "confirm", "take_over_after", "max_radius_m", "max_yaw_deg", "lost_radius_m",
+         "position_sigma_scale", "estimate_max_radius_m", "estimate_max_yaw_deg",
+         "estimate_sigma_scale", "disagreement_frames", "place_sigma_m", "place_length_m"}));
     APRT_TRY(r.boolean(fl, fp, "enabled", &f.enabled));
     APRT_TRY(r.num(fl, fp, "distance_noise", 0, 1, &f.distance_noise));
     APRT_TRY(r.num(fl, fp, "yaw_noise_deg_per_m", 0, 90, &f.yaw_noise_deg_per_m));
@@ -393,6 +394,8 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(r.num(fl, fp, "estimate_max_yaw_deg", 0.01, 180, &f.estimate_max_yaw_deg));
     APRT_TRY(r.num(fl, fp, "estimate_sigma_scale", 0.01, 100, &f.estimate_sigma_scale));
     APRT_TRY(r.integer(fl, fp, "disagreement_frames", 0, 100000, &f.disagreement_frames));
+    APRT_TRY(r.num(fl, fp, "place_sigma_m", 0, 1000, &f.place_sigma_m));
+    APRT_TRY(r.num(fl, fp, "place_length_m", 0.1, 1e5, &f.place_length_m));
 
     const Node* od = root->get("odometry");
     Config::Odometry& o = c.odometry;

@@ -22,7 +22,8 @@
 // A pose is valid when the filter has a fix and its own 95 % horizontal
 // radius and yaw interval are within the limits: the covariance published is
 // the filter's, not the single estimate's, with the estimates' mean
-// disagreement with it added (disagreement_frames).
+// disagreement with it added (disagreement_frames). With place_sigma_m the
+// state also holds the bias the estimates of one place share.
 //
 // Pure, allocation-free, fixed-size state: the loop's estimator and `aprt
 // eval` run the same filter over the same estimates.
@@ -66,6 +67,18 @@ struct PoseFilterParams {
   // disagree by about -b on average, so the published covariance (and
   // validity) take in what the estimates measure against it.
   int disagreement_frames = 0;
+  // The part of the estimates' error that stays with the place (0: off): a
+  // bias of this standard deviation per horizontal axis, shared by the
+  // estimates of views less than about `place_length_m` apart (a first-order
+  // Gauss-Markov process in the distance driven), estimated beside the pose.
+  // Why: on the town's validation drives about half of the model's error
+  // variance is correlated over ~5 m of road (docs/evaluation.md), and a
+  // filter that averages such estimates as independent believes a mean that
+  // does not shrink. With the bias in the state the filter weighs a run of
+  // estimates from one place as what it is -- one view's worth of evidence
+  // about the place's offset -- and its covariance says so.
+  double place_sigma_m = 0.0;
+  double place_length_m = 5.0;
 };
 
 // A planar estimate of base_link in the map with one standard deviation per axis.
@@ -102,15 +115,15 @@ class PoseFilter {
 
  private:
   struct State {
-    double s[3] = {};  // x, y, yaw
-    double P[9] = {};  // row-major covariance
-    int count = 0;     // estimates taken (0: empty)
-    double d[2] = {};  // running mean of the position innovations taken (disagreement_frames)
+    double s[5] = {};   // x, y, yaw, and the estimates' place bias in x and y
+    double P[25] = {};  // row-major covariance (the bias rows zero when place_sigma_m is 0)
+    int count = 0;      // estimates taken (0: empty)
+    double d[2] = {};   // running mean of the position innovations taken (disagreement_frames)
   };
   void predict(State* k, const PlanarMotion& m) const noexcept;
   // The estimate's Mahalanobis distance^2 from k; with `update`, k takes it.
   double innovation(const State& k, const PlanarPose& z, bool update, State* out) const noexcept;
-  static State start(const PlanarPose& z) noexcept;
+  State start(const PlanarPose& z) const noexcept;
   Output output(const State& k, uint32_t flags) const noexcept;
 
   PoseFilterParams p_;

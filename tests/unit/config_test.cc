@@ -305,7 +305,7 @@ TEST(Config, PoseFilter) {
       "model: m\nsource: {replay: {path: d}}\nsanity:\n  filter: {enabled: true, "
       "distance_noise: 0.1, max_radius_m: 10, confirm: 3, position_sigma_scale: 0.6,\n"
       "    estimate_max_radius_m: 120, estimate_max_yaw_deg: 25, estimate_sigma_scale: 0.35,\n"
-      "    disagreement_frames: 25}\n",
+      "    disagreement_frames: 25, place_sigma_m: 1.5, place_length_m: 8}\n",
       "test.yaml");
   ASSERT_TRUE(c) << c.error().message();
   EXPECT_TRUE(c->sanity.filter.enabled);
@@ -317,6 +317,10 @@ TEST(Config, PoseFilter) {
   EXPECT_EQ(c->sanity.filter.estimate_max_yaw_deg, 25.0);
   EXPECT_EQ(c->sanity.filter.estimate_sigma_scale, 0.35);
   EXPECT_EQ(c->sanity.filter.disagreement_frames, 25);
+  EXPECT_EQ(c->sanity.filter.place_sigma_m, 1.5);
+  EXPECT_EQ(c->sanity.filter.place_length_m, 8.0);
+  expect_refused("model: m\nsource: {replay: {path: d}}\nsanity: {filter: {place_length_m: 0}}\n",
+                 "place_length_m");
   expect_refused(
       "model: m\nsource: {replay: {path: d}}\nsanity: {filter: {disagreement_frames: -1}}\n",
       "disagreement_frames");
