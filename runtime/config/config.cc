@@ -417,7 +417,7 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     const Node* oc = od ? od->get("can") : nullptr;
     APRT_TRY(r.map(oc, "odometry.can",
                    {"interface", "dbc", "speed", "yaw_rate", "speed_unit", "yaw_rate_unit",
-                    "yaw_rate_clockwise", "max_pair_age_ms"}));
+                    "yaw_rate_clockwise", "max_pair_age_ms", "direction", "reverse_values"}));
     APRT_TRY(r.str(oc, "odometry.can", "interface", &o.can.interface));
     APRT_TRY(r.str(oc, "odometry.can", "dbc", &o.can.dbc));
     APRT_TRY(r.str(oc, "odometry.can", "speed", &o.can.speed));
@@ -426,6 +426,9 @@ Expected<Config> parse_config(const std::string& text, const std::string& origin
     APRT_TRY(r.str(oc, "odometry.can", "yaw_rate_unit", &o.can.yaw_rate_unit));
     APRT_TRY(r.boolean(oc, "odometry.can", "yaw_rate_clockwise", &o.can.yaw_rate_clockwise));
     APRT_TRY(r.integer(oc, "odometry.can", "max_pair_age_ms", 1, 10000, &o.can.max_pair_age_ms));
+    APRT_TRY(r.str(oc, "odometry.can", "direction", &o.can.direction));
+    APRT_TRY(r.int_list(oc, "odometry.can", "reverse_values", -(1L << 31), (1L << 31) - 1,
+                        &o.can.reverse_values));
     if (o.source == "can") {
       for (const auto& [key, value] :
            {std::pair<const char*, const std::string*>{"dbc", &o.can.dbc},

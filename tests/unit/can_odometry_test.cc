@@ -61,7 +61,21 @@ const char* kDbc =
     "BO_ 2566844926 Both: 8 ESP\n"
     " SG_ Speed : 0|16@1- (0.001,0) [-50|50] \"m/s\" ADAS\n"
     " SG_ Rate : 16|16@1- (0.0001,0) [-3|3] \"rad/s\" ADAS\n"
-    " SG_ RateNoUnit : 32|16@1- (0.0001,0) [-3|3] \"\" ADAS\n";
+    " SG_ RateNoUnit : 32|16@1- (0.0001,0) [-3|3] \"\" ADAS\n"
+    "\n"
+    "BO_ 418 Gear: 2 TCU\n"
+    " SG_ Direction : 0|3@1+ (1,0) [0|5] \"\" ADAS\n"
+    "\n"
+    "BO_ 419 Wheels: 8 ESP\n"
+    " SG_ Page M : 0|4@1+ (1,0) [0|15] \"\" ADAS\n"
+    " SG_ SpeedRear m2 : 8|16@1+ (0.01,0) [0|320] \"km/h\" ADAS\n"
+    " SG_ GearPos m2 : 24|3@1+ (1,0) [0|5] \"\" ADAS\n"
+    " SG_ Other m3 : 8|16@1+ (1,0) [0|65535] \"\" ADAS\n"
+    "\n"
+    "BO_ 420 Orphan: 8 ESP\n"
+    " SG_ Lone m1 : 0|16@1+ (0.01,0) [0|320] \"km/h\" ADAS\n"
+    "\n"
+    "VAL_ 418 Direction 0 \"Park\" 1 \"Reverse\" 2 \"Neutral\" 3 \"Drive\" 7 \"Invalid\" ;\n";
 
 can::Dbc test_dbc() {
   auto d = can::parse_dbc(kDbc, "test.dbc");
@@ -200,9 +214,13 @@ TEST(CanOdometry, ConfigurationErrorsSayWhatTheDbcHas) {
   o.yaw_rate = "YawRate";
   e = error_of(o);
   EXPECT_TRUE(has(e, "is not MESSAGE.SIGNAL")) << e;
-  o.yaw_rate = "Yaw.Muxed";
+  o.yaw_rate = "Yaw.Muxed";  // multiplexed: read from the frames of its page
+  EXPECT_EQ(error_of(o), "");
+  o.yaw_rate = "Orphan.Lone";
+  o.yaw_rate_unit = "deg/s";
   e = error_of(o);
-  EXPECT_TRUE(has(e, "is multiplexed")) << e;
+  EXPECT_TRUE(has(e, "is multiplexed (m1) but message Orphan in test.dbc has no multiplexor")) << e;
+  o.yaw_rate_unit = "";
   // A signal without a unit (or one of the other quantity) needs the unit said.
   o.yaw_rate = "Both.RateNoUnit";
   e = error_of(o);
@@ -213,6 +231,88 @@ TEST(CanOdometry, ConfigurationErrorsSayWhatTheDbcHas) {
   o.speed = "Yaw.YawRate";  // deg/s is no speed
   e = error_of(o);
   EXPECT_TRUE(has(e, "not a speed aprt knows")) << e;
+}
+
+// Most wheel-speed signals have no sign: the direction of travel (a gear or
+// direction signal) gives it, paired like the yaw rate; a direction that is
+// stale, missing or an invalid code refuses the speed rather than guess.
+TEST(CanOdometry, AnUnsignedSpeedTakesTheDirectionsSign) {
+  const can::Dbc dbc = test_dbc();
+  CanOdometryOptions o = two_messages();
+  o.direction = "Gear.Direction";
+  o.reverse_values = {1};
+  auto d = CanOdometryDecoder::create(dbc, o, "test.dbc");
+  ASSERT_TRUE(d) << d.error().message();
+  EXPECT_EQ(d->description(),
+            "Speed.VehicleSpeed [km/h] + Yaw.YawRate [deg/s], direction Gear.Direction "
+            "(reverse: 1)");
+  uint32_t ids[3];
+  ASSERT_EQ(d->ids(ids), 3);
+  EXPECT_EQ(ids[2], 418u);
+  TwistSample s;
+  const int64_t t0 = 1795000000000000000, ms = 1000000;
+  const Frame speed = frame_with(dbc, "Speed", "VehicleSpeed", 7.2);
+  d->on_frame(frame_with(dbc, "Yaw", "YawRate", 0.0), t0, &s);
+  EXPECT_EQ(d->on_frame(speed, t0, &s), CanOdometryDecoder::Result::kRefused);
+  EXPECT_STREQ(d->last_refusal(), "no direction within max_pair_age_ms of the speed");
+  EXPECT_EQ(d->on_frame(frame_with(dbc, "Gear", "Direction", 1), t0, &s),
+            CanOdometryDecoder::Result::kHeld);
+  {
+    const AllocationScope scope;
+    ASSERT_EQ(d->on_frame(speed, t0 + 10 * ms, &s), CanOdometryDecoder::Result::kSample);
+    EXPECT_EQ(scope.count(), 0u);
+  }
+  EXPECT_NEAR(s.speed_mps, -2.0, 1e-9);  // reversing
+  d->on_frame(frame_with(dbc, "Gear", "Direction", 3), t0 + 20 * ms, &s);
+  d->on_frame(frame_with(dbc, "Yaw", "YawRate", 0.0), t0 + 20 * ms, &s);
+  ASSERT_EQ(d->on_frame(speed, t0 + 30 * ms, &s), CanOdometryDecoder::Result::kSample);
+  EXPECT_NEAR(s.speed_mps, 2.0, 1e-9);  // "Drive"
+  // A stale direction pairs with nothing.
+  d->on_frame(frame_with(dbc, "Yaw", "YawRate", 0.0), t0 + 200 * ms, &s);
+  EXPECT_EQ(d->on_frame(speed, t0 + 200 * ms, &s), CanOdometryDecoder::Result::kRefused);
+  // 7, outside the DBC's range [0|5], is the ECU's "Invalid": refused, and
+  // the direction before it is not kept.
+  d->on_frame(frame_with(dbc, "Gear", "Direction", 3), t0 + 210 * ms, &s);
+  EXPECT_EQ(d->on_frame(frame_with(dbc, "Gear", "Direction", 7), t0 + 215 * ms, &s),
+            CanOdometryDecoder::Result::kRefused);
+  EXPECT_EQ(d->on_frame(speed, t0 + 220 * ms, &s), CanOdometryDecoder::Result::kRefused);
+  EXPECT_STREQ(d->last_refusal(), "no direction within max_pair_age_ms of the speed");
+  // Without reverse_values the error says what the DBC calls each value.
+  o.reverse_values.clear();
+  auto e = CanOdometryDecoder::create(dbc, o, "test.dbc");
+  ASSERT_FALSE(e);
+  EXPECT_NE(std::string(e.error().message())
+                .find("needs odometry.can.reverse_values (its raw values that mean reversing); "
+                      "the DBC names 0 'Park', 1 'Reverse', 2 'Neutral', 3 'Drive', 7 'Invalid'"),
+            std::string::npos)
+      << e.error().message();
+}
+
+// A multiplexed signal is in the frames whose multiplexor has its value: a
+// frame of another page is passed over, not refused.
+TEST(CanOdometry, AMultiplexedSignalIsReadFromItsPage) {
+  const can::Dbc dbc = test_dbc();
+  CanOdometryOptions o = two_messages();
+  o.speed = "Wheels.SpeedRear";
+  o.direction = "Wheels.GearPos";  // on the same page of the same message
+  o.reverse_values = {1};
+  auto d = CanOdometryDecoder::create(dbc, o, "test.dbc");
+  ASSERT_TRUE(d) << d.error().message();
+  uint32_t ids[3];
+  ASSERT_EQ(d->ids(ids), 2);
+  const can::DbcMessage* m = dbc.message("Wheels");
+  Frame page2 = frame_with(dbc, "Wheels", "SpeedRear", 36.0);
+  put(*m->signal("Page"), 2, page2.data);
+  put(*m->signal("GearPos"), 1, page2.data);
+  Frame page3 = frame_with(dbc, "Wheels", "Other", 65000);
+  put(*m->signal("Page"), 3, page3.data);
+  TwistSample s;
+  const int64_t t0 = 1795000000000000000;
+  d->on_frame(frame_with(dbc, "Yaw", "YawRate", 5.0), t0, &s);
+  EXPECT_EQ(d->on_frame(page3, t0, &s), CanOdometryDecoder::Result::kIgnored);
+  ASSERT_EQ(d->on_frame(page2, t0, &s), CanOdometryDecoder::Result::kSample);
+  EXPECT_NEAR(s.speed_mps, -10.0, 1e-9);
+  EXPECT_NEAR(s.yaw_rate_radps, 5.0 * M_PI / 180.0, 1e-9);
 }
 
 TEST(CanOdometry, UnitsAreConverted) {
@@ -309,6 +409,19 @@ TEST(CanOdometry, TheExampleDbcGivesTheDocumentedSignals) {
   ASSERT_EQ(d->on_frame(speed, 1795000000010000000, &s), CanOdometryDecoder::Result::kSample);
   EXPECT_NEAR(s.speed_mps, 20.0, 1e-9);
   EXPECT_NEAR(s.yaw_rate_radps, 12.5 * M_PI / 180.0, 1e-9);
+  // With its gear as the direction: `cansend can0 1A2#01` is R.
+  o.direction = "TCU_Gear.GearPosition";
+  o.reverse_values = {1};
+  auto g = CanOdometryDecoder::create(dbc.value(), o, "example");
+  ASSERT_TRUE(g) << g.error().message();
+  Frame gear;
+  gear.id = 0x1A2;
+  gear.len = 2;
+  gear.data[0] = 0x01;
+  EXPECT_EQ(g->on_frame(yaw, 1795000000000000000, &s), CanOdometryDecoder::Result::kHeld);
+  EXPECT_EQ(g->on_frame(gear, 1795000000000000000, &s), CanOdometryDecoder::Result::kHeld);
+  ASSERT_EQ(g->on_frame(speed, 1795000000010000000, &s), CanOdometryDecoder::Result::kSample);
+  EXPECT_NEAR(s.speed_mps, -20.0, 1e-9);
 }
 
 }  // namespace

@@ -345,7 +345,7 @@ TEST(Config, PoseFilter) {
       "model: m\nsource: {type: v4l2}\nsanity: {filter: {enabled: true}}\n"
       "odometry:\n  source: can\n  can: {interface: vcan0, dbc: car.dbc, speed: ESP.Speed,\n"
       "        yaw_rate: ESP.Yaw, yaw_rate_unit: deg/s, yaw_rate_clockwise: true,\n"
-      "        max_pair_age_ms: 40}\n",
+      "        max_pair_age_ms: 40, direction: TCU.Gear, reverse_values: [1, 9]}\n",
       "test.yaml");
   ASSERT_TRUE(bus) << bus.error().message();
   EXPECT_EQ(bus->odometry.can.interface, "vcan0");
@@ -356,6 +356,10 @@ TEST(Config, PoseFilter) {
   EXPECT_EQ(bus->odometry.can.yaw_rate_unit, "deg/s");
   EXPECT_TRUE(bus->odometry.can.yaw_rate_clockwise);
   EXPECT_EQ(bus->odometry.can.max_pair_age_ms, 40);
+  EXPECT_EQ(bus->odometry.can.direction, "TCU.Gear");
+  EXPECT_EQ(bus->odometry.can.reverse_values, (std::vector<int>{1, 9}));
+  expect_refused("model: m\nsource: {type: v4l2}\nodometry: {can: {reverse_values: [R]}}\n",
+                 "odometry.can.reverse_values[0]");
   expect_refused("model: m\nsource: {type: v4l2}\nodometry: {source: can, can: {speed: A.B}}\n",
                  "odometry.source can needs odometry.can.dbc (the vehicle's DBC file)");
   expect_refused(

@@ -21,10 +21,33 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int64_t kReopenEveryNs = 1000000000;
 constexpr int64_t kAliveNs = 1000000000;
 
+bool unit_is(const std::string& u, std::initializer_list<const char*> names) {
+  for (const char* n : names) {
+    if (u == n) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+double speed_unit_scale(const std::string& u) {
+  if (unit_is(u, {"m/s", "mps", "m/sec"})) return 1.0;
+  if (unit_is(u, {"km/h", "kph", "kmh", "km/hr", "kmph"})) return 1.0 / 3.6;
+  if (unit_is(u, {"mph", "mi/h"})) return 0.44704;
+  return 0;
+}
+
+double yaw_rate_unit_scale(const std::string& u) {
+  if (unit_is(u, {"rad/s", "radps", "rad/sec"})) return 1.0;
+  if (unit_is(u, {"deg/s", "degps", "deg/sec", "\xC2\xB0/s", "dps"})) return kPi / 180.0;
+  return 0;
+}
+
 // "MESSAGE.SIGNAL" in the DBC, or an error that says what is there.
-Expected<const can::DbcSignal*> find_signal(const can::Dbc& dbc, const std::string& path,
-                                            const char* key, const std::string& origin,
-                                            const can::DbcMessage** message) {
+Expected<CanOdometryDecoder::Channel> CanOdometryDecoder::locate(const can::Dbc& dbc,
+                                                                 const std::string& path,
+                                                                 const char* key,
+                                                                 const std::string& origin) {
   const size_t dot = path.find('.');
   if (dot == std::string::npos || dot == 0 || dot + 1 == path.size()) {
     return Error(Errc::kInvalidArgument,
@@ -55,70 +78,56 @@ Expected<const can::DbcSignal*> find_signal(const can::Dbc& dbc, const std::stri
                  msg.c_str(), origin.c_str(), sig.c_str(), key,
                  names.empty() ? "none" : names.c_str());
   }
-  if (s->multiplexor || s->mux_value >= 0) {
-    return Error(Errc::kUnsupported,
-                 "can odometry: signal %s is multiplexed (%s in %s); odometry signals must be in "
-                 "every frame of their message",
-                 path.c_str(), s->multiplexor ? "M" : "m<k>", origin.c_str());
+  Channel c;
+  c.signal = *s;
+  c.id = m->id;
+  c.bytes = s->bytes_spanned();
+  if (s->mux_value >= 0) {
+    const can::DbcSignal* mux = nullptr;
+    for (const auto& ss : m->signals) {
+      if (ss.multiplexor) mux = &ss;
+    }
+    if (!mux) {
+      return Error(Errc::kInvalidArgument,
+                   "can odometry: signal %s is multiplexed (m%d) but message %s in %s has no "
+                   "multiplexor (M) signal",
+                   path.c_str(), s->mux_value, msg.c_str(), origin.c_str());
+    }
+    c.muxed = true;
+    c.mux = *mux;
+    c.mux_bytes = mux->bytes_spanned();
+    c.mux_value = uint64_t(s->mux_value);
   }
-  *message = m;
-  return s;
-}
-
-bool unit_is(const std::string& u, std::initializer_list<const char*> names) {
-  for (const char* n : names) {
-    if (u == n) return true;
-  }
-  return false;
-}
-
-}  // namespace
-
-double speed_unit_scale(const std::string& u) {
-  if (unit_is(u, {"m/s", "mps", "m/sec"})) return 1.0;
-  if (unit_is(u, {"km/h", "kph", "kmh", "km/hr", "kmph"})) return 1.0 / 3.6;
-  if (unit_is(u, {"mph", "mi/h"})) return 0.44704;
-  return 0;
-}
-
-double yaw_rate_unit_scale(const std::string& u) {
-  if (unit_is(u, {"rad/s", "radps", "rad/sec"})) return 1.0;
-  if (unit_is(u, {"deg/s", "degps", "deg/sec", "\xC2\xB0/s", "dps"})) return kPi / 180.0;
-  return 0;
+  return c;
 }
 
 Expected<CanOdometryDecoder> CanOdometryDecoder::create(const can::Dbc& dbc,
                                                         const CanOdometryOptions& o,
                                                         const std::string& origin) {
-  const can::DbcMessage *speed_msg = nullptr, *yaw_msg = nullptr;
-  auto speed = find_signal(dbc, o.speed, "speed", origin, &speed_msg);
+  auto speed = locate(dbc, o.speed, "speed", origin);
   if (!speed) return speed.error();
-  auto yaw = find_signal(dbc, o.yaw_rate, "yaw_rate", origin, &yaw_msg);
+  auto yaw = locate(dbc, o.yaw_rate, "yaw_rate", origin);
   if (!yaw) return yaw.error();
   CanOdometryDecoder d;
-  d.speed_ = *speed.value();
-  d.yaw_ = *yaw.value();
-  d.speed_id_ = speed_msg->id;
-  d.yaw_id_ = yaw_msg->id;
-  d.speed_bytes_ = d.speed_.bytes_spanned();
-  d.yaw_bytes_ = d.yaw_.bytes_spanned();
-  const std::string su = o.speed_unit.empty() ? d.speed_.unit : o.speed_unit;
-  const std::string yu = o.yaw_rate_unit.empty() ? d.yaw_.unit : o.yaw_rate_unit;
-  d.speed_scale_ = speed_unit_scale(su);
-  d.yaw_scale_ = yaw_rate_unit_scale(yu);
-  if (d.speed_scale_ == 0) {
+  d.speed_ = speed.value();
+  d.yaw_ = yaw.value();
+  const std::string su = o.speed_unit.empty() ? d.speed_.signal.unit : o.speed_unit;
+  const std::string yu = o.yaw_rate_unit.empty() ? d.yaw_.signal.unit : o.yaw_rate_unit;
+  d.speed_.scale = speed_unit_scale(su);
+  d.yaw_.scale = yaw_rate_unit_scale(yu);
+  if (d.speed_.scale == 0) {
     return Error(Errc::kInvalidArgument,
                  "can odometry: %s's unit '%s' is not a speed aprt knows (m/s, km/h, mph); set "
                  "odometry.can.speed_unit to the unit its factor gives",
                  o.speed.c_str(), su.c_str());
   }
-  if (d.yaw_scale_ == 0) {
+  if (d.yaw_.scale == 0) {
     return Error(Errc::kInvalidArgument,
                  "can odometry: %s's unit '%s' is not a yaw rate aprt knows (rad/s, deg/s); set "
                  "odometry.can.yaw_rate_unit to the unit its factor gives",
                  o.yaw_rate.c_str(), yu.c_str());
   }
-  if (o.yaw_rate_clockwise) d.yaw_scale_ = -d.yaw_scale_;
+  if (o.yaw_rate_clockwise) d.yaw_.scale = -d.yaw_.scale;
   if (o.max_pair_age_ms < 1) {
     return Error(Errc::kInvalidArgument, "can odometry: max_pair_age_ms %d must be >= 1",
                  o.max_pair_age_ms);
@@ -126,32 +135,98 @@ Expected<CanOdometryDecoder> CanOdometryDecoder::create(const can::Dbc& dbc,
   d.max_pair_age_ns_ = int64_t(o.max_pair_age_ms) * 1000000;
   d.description_ = o.speed + " [" + su + "] + " + o.yaw_rate + " [" + yu + "]" +
                    (o.yaw_rate_clockwise ? " (clockwise)" : "");
+  if (!o.direction.empty()) {
+    auto dir = locate(dbc, o.direction, "direction", origin);
+    if (!dir) return dir.error();
+    if (o.reverse_values.empty()) {
+      // Say what the DBC calls each value, so the user can pick.
+      std::string table;
+      for (const auto& [raw, name] : dir.value().signal.values) {
+        if (table.size() > 200) {
+          table += ", ...";
+          break;
+        }
+        table += (table.empty() ? "" : ", ") + std::to_string(raw) + " '" + name + "'";
+      }
+      return Error(
+          Errc::kInvalidArgument,
+          "can odometry: odometry.can.direction %s needs odometry.can.reverse_values "
+          "(its raw values that mean reversing); %s",
+          o.direction.c_str(),
+          table.empty() ? "the DBC names none of its values" : ("the DBC names " + table).c_str());
+    }
+    d.direction_ = dir.value();
+    d.has_direction_ = true;
+    d.reverse_values_ = o.reverse_values;
+    std::string rv;
+    for (int v : o.reverse_values) rv += (rv.empty() ? "" : ", ") + std::to_string(v);
+    d.description_ += ", direction " + o.direction + " (reverse: " + rv + ")";
+  }
   return d;
 }
 
-bool CanOdometryDecoder::decode(const can::DbcSignal& s, int bytes, const can::Frame& f,
-                                double scale, double* out) noexcept {
-  if (f.len < bytes) {
+int CanOdometryDecoder::ids(uint32_t out[3]) const {
+  int n = 0;
+  for (const Channel* c : {&speed_, &yaw_, &direction_}) {
+    if (c == &direction_ && !has_direction_) break;
+    bool seen = false;
+    for (int i = 0; i < n; ++i) seen = seen || out[i] == c->id;
+    if (!seen) out[n++] = c->id;
+  }
+  return n;
+}
+
+bool CanOdometryDecoder::carries(const Channel& c, const can::Frame& f) noexcept {
+  if (f.id != c.id) return false;
+  if (!c.muxed) return true;
+  return f.len >= c.mux_bytes && c.mux.raw(f.data, f.len) == c.mux_value;
+}
+
+bool CanOdometryDecoder::decode(const Channel& c, const can::Frame& f, double* out) noexcept {
+  if (f.len < c.bytes) {
     last_refusal_ = "frame shorter than its signal";
     return false;
   }
-  const double v = s.physical(f.data, f.len);
+  const double v = c.signal.physical(f.data, f.len);
   // The DBC's own range (where one is given) excludes the ECU's invalid codes.
-  if (s.max > s.min && (v < s.min || v > s.max)) {
+  if (c.signal.max > c.signal.min && (v < c.signal.min || v > c.signal.max)) {
     last_refusal_ = "value outside the DBC's range (an invalid code?)";
     return false;
   }
-  *out = v * scale;
+  *out = v * c.scale;
+  return true;
+}
+
+bool CanOdometryDecoder::take_direction(const can::Frame& f, int64_t stamp_ns) noexcept {
+  double unused;
+  if (!decode(direction_, f, &unused)) {
+    have_direction_ = false;
+    return false;
+  }
+  // The raw value, as the DBC's value table and reverse_values count it.
+  const uint64_t bits = direction_.signal.raw(f.data, f.len);
+  int64_t raw = int64_t(bits);
+  if (direction_.signal.is_signed && direction_.signal.length < 64 &&
+      (bits >> (direction_.signal.length - 1)) & 1u) {
+    raw = int64_t(bits | (~0ull << direction_.signal.length));
+  }
+  reversing_ = false;
+  for (int v : reverse_values_) reversing_ = reversing_ || raw == v;
+  direction_stamp_ns_ = stamp_ns;
+  have_direction_ = true;
   return true;
 }
 
 CanOdometryDecoder::Result CanOdometryDecoder::on_frame(const can::Frame& f, int64_t stamp_ns,
                                                         TwistSample* out) noexcept {
-  const bool is_yaw = f.id == yaw_id_, is_speed = f.id == speed_id_;
-  if (!is_yaw && !is_speed) return Result::kIgnored;
+  const bool is_yaw = carries(yaw_, f), is_speed = carries(speed_, f);
+  const bool is_direction = has_direction_ && carries(direction_, f);
+  if (!is_yaw && !is_speed && !is_direction) return Result::kIgnored;
+  // A refused direction leaves none to pair with; the frame's yaw rate still counts.
+  const bool direction_refused = is_direction && !take_direction(f, stamp_ns);
   if (is_yaw) {
     double w;
-    if (!decode(yaw_, yaw_bytes_, f, yaw_scale_, &w)) {
+    if (!decode(yaw_, f, &w)) {
       have_yaw_ = false;
       return Result::kRefused;
     }
@@ -163,10 +238,10 @@ CanOdometryDecoder::Result CanOdometryDecoder::on_frame(const can::Frame& f, int
     yaw_value_ = w;
     yaw_stamp_ns_ = stamp_ns;
     have_yaw_ = true;
-    if (!is_speed) return Result::kHeld;
   }
+  if (!is_speed) return direction_refused ? Result::kRefused : Result::kHeld;
   double v;
-  if (!decode(speed_, speed_bytes_, f, speed_scale_, &v)) return Result::kRefused;
+  if (!decode(speed_, f, &v)) return Result::kRefused;
   if (!(std::fabs(v) <= kMaxSpeedMps)) {
     last_refusal_ = "speed beyond 150 m/s";
     return Result::kRefused;
@@ -175,6 +250,14 @@ CanOdometryDecoder::Result CanOdometryDecoder::on_frame(const can::Frame& f, int
   if (!have_yaw_ || age > max_pair_age_ns_ || age < -max_pair_age_ns_) {
     last_refusal_ = "no yaw rate within max_pair_age_ms of the speed";
     return Result::kRefused;
+  }
+  if (has_direction_) {
+    const int64_t dage = stamp_ns - direction_stamp_ns_;
+    if (!have_direction_ || dage > max_pair_age_ns_ || dage < -max_pair_age_ns_) {
+      last_refusal_ = "no direction within max_pair_age_ms of the speed";
+      return Result::kRefused;
+    }
+    v = reversing_ ? -std::fabs(v) : std::fabs(v);
   }
   if (stamp_ns <= 0) {
     last_refusal_ = "frame without a receive time";
@@ -195,8 +278,8 @@ Expected<std::unique_ptr<CanTwistReader>> CanTwistReader::create(const CanOdomet
   if (!dec) return dec.error();
   std::unique_ptr<CanTwistReader> r(new (std::nothrow) CanTwistReader(std::move(dec.value())));
   if (!r) return Error(Errc::kOutOfMemory, "can odometry: out of memory");
-  const uint32_t ids[2] = {r->decoder_.speed_id(), r->decoder_.yaw_rate_id()};
-  const int n = ids[0] == ids[1] ? 1 : 2;
+  uint32_t ids[3];
+  const int n = r->decoder_.ids(ids);
   auto s = can::SocketCan::open(o.interface, false, true);
   if (s) {
     r->socket_ = std::move(s.value());

@@ -15,7 +15,13 @@
 // the clock live frames are put on, runtime/loop/estimator.cc). Speed and
 // yaw rate in one message give one sample per message; in two messages, one
 // sample per speed message with the latest yaw rate, when that is at most
-// max_pair_age_ms old. Values come in the DBC's units (m/s, km/h, mph;
+// max_pair_age_ms old. A vehicle whose speed signal has no sign (most
+// wheel-speed signals) names its direction of travel (a gear or direction
+// signal, in any of the messages or a third) and the raw values that mean
+// reverse: the speed then takes the sign of the latest direction at most
+// max_pair_age_ms old. A multiplexed signal (m<k>) is read from the frames
+// whose multiplexor is k; the others do not carry it and are passed over.
+// Values come in the DBC's units (m/s, km/h, mph;
 // rad/s, deg/s), converted to SI; a value outside the signal's DBC range
 // (where ECUs put their "invalid" codes) or beyond physical bounds is refused
 // and counted, never used.
@@ -25,6 +31,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "drivers/can/can_frame.h"
 #include "drivers/can/dbc.h"
@@ -43,6 +50,9 @@ struct CanOdometryOptions {
   std::string yaw_rate_unit;        // "" : the DBC's; else rad/s or deg/s
   bool yaw_rate_clockwise = false;  // the signal counts clockwise positive (ROS: counter-clockwise)
   int max_pair_age_ms = 100;        // two messages: the yaw rate's age a speed may pair with
+  std::string direction;            // "MESSAGE.SIGNAL" of the direction of travel ("": the
+                                    // speed is signed)
+  std::vector<int> reverse_values;  // the direction's raw values that mean reversing
 };
 
 // SI per unit of a DBC unit string (m/s, km/h, kph, kmh, mph; rad/s, deg/s,
@@ -66,26 +76,49 @@ class CanOdometryDecoder {
   // One frame received at stamp_ns (CLOCK_REALTIME). @rt.
   Result on_frame(const can::Frame& f, int64_t stamp_ns, TwistSample* out) noexcept;
 
-  uint32_t speed_id() const { return speed_id_; }
-  uint32_t yaw_rate_id() const { return yaw_id_; }
+  uint32_t speed_id() const { return speed_.id; }
+  uint32_t yaw_rate_id() const { return yaw_.id; }
+  // The distinct ids the decoder reads (the kernel filter): 1 to 3.
+  int ids(uint32_t out[3]) const;
   // "ESP_21.VEHICLE_SPEED [km/h] + ESP_21.YAW_RATE [deg/s]" for messages.
   const std::string& description() const { return description_; }
   // Why the last kRefused (a static string).
   const char* last_refusal() const { return last_refusal_; }
 
  private:
-  CanOdometryDecoder() = default;
-  bool decode(const can::DbcSignal& s, int bytes, const can::Frame& f, double scale,
-              double* out) noexcept;
+  // One signal located in the DBC: its message's id, the bytes a frame
+  // needs, and, for a multiplexed signal, the multiplexor and its value.
+  struct Channel {
+    can::DbcSignal signal;
+    uint32_t id = 0;
+    int bytes = 0;
+    double scale = 1;
+    bool muxed = false;
+    can::DbcSignal mux;
+    int mux_bytes = 0;
+    uint64_t mux_value = 0;
+  };
+  static Expected<Channel> locate(const can::Dbc& dbc, const std::string& path, const char* key,
+                                  const std::string& origin);
 
-  can::DbcSignal speed_, yaw_;
-  uint32_t speed_id_ = 0, yaw_id_ = 0;
-  int speed_bytes_ = 0, yaw_bytes_ = 0;  // bytes a frame must have to carry the signal
-  double speed_scale_ = 1, yaw_scale_ = 1;
+  CanOdometryDecoder() = default;
+  // Whether this frame carries the channel's signal (its id; its
+  // multiplexor's value).
+  static bool carries(const Channel& c, const can::Frame& f) noexcept;
+  bool decode(const Channel& c, const can::Frame& f, double* out) noexcept;
+  // The direction frame: whether it says reversing (false: refused).
+  bool take_direction(const can::Frame& f, int64_t stamp_ns) noexcept;
+
+  Channel speed_, yaw_, direction_;
+  bool has_direction_ = false;
+  std::vector<int> reverse_values_;
   int64_t max_pair_age_ns_ = 0;
   double yaw_value_ = 0;
   int64_t yaw_stamp_ns_ = 0;
   bool have_yaw_ = false;
+  bool reversing_ = false;
+  int64_t direction_stamp_ns_ = 0;
+  bool have_direction_ = false;
   std::string description_;
   const char* last_refusal_ = "";
 };
