@@ -21,10 +21,10 @@
 // reverse: the speed then takes the sign of the latest direction at most
 // max_pair_age_ms old. A multiplexed signal (m<k>) is read from the frames
 // whose multiplexor is k; the others do not carry it and are passed over.
-// Values come in the DBC's units (m/s, km/h, mph;
-// rad/s, deg/s), converted to SI; a value outside the signal's DBC range
-// (where ECUs put their "invalid" codes) or beyond physical bounds is refused
-// and counted, never used.
+// Values come in the DBC's units (m/s, km/h, mph; rad/s, deg/s), converted
+// to SI; a value outside the signal's DBC range (where ECUs put their
+// "invalid" codes) or beyond physical bounds is refused and counted, never
+// used.
 #pragma once
 
 #include <atomic>
@@ -49,7 +49,7 @@ struct CanOdometryOptions {
   std::string speed_unit;           // "" : the DBC's; else m/s, km/h or mph
   std::string yaw_rate_unit;        // "" : the DBC's; else rad/s or deg/s
   bool yaw_rate_clockwise = false;  // the signal counts clockwise positive (ROS: counter-clockwise)
-  int max_pair_age_ms = 100;        // two messages: the yaw rate's age a speed may pair with
+  int max_pair_age_ms = 100;        // the yaw rate's (direction's) age a speed may pair with
   std::string direction;            // "MESSAGE.SIGNAL" of the direction of travel ("": the
                                     // speed is signed)
   std::vector<int> reverse_values;  // the direction's raw values that mean reversing
@@ -106,7 +106,7 @@ class CanOdometryDecoder {
   // multiplexor's value).
   static bool carries(const Channel& c, const can::Frame& f) noexcept;
   bool decode(const Channel& c, const can::Frame& f, double* out) noexcept;
-  // The direction frame: whether it says reversing (false: refused).
+  // Takes the direction a frame carries (reversing or not); false: refused.
   bool take_direction(const can::Frame& f, int64_t stamp_ns) noexcept;
 
   Channel speed_, yaw_, direction_;
