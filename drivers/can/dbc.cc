@@ -30,17 +30,19 @@ uint64_t DbcSignal::raw(const uint8_t* data, size_t bytes) const noexcept {
   return v;
 }
 
-double DbcSignal::physical(const uint8_t* data, size_t bytes) const noexcept {
+int64_t DbcSignal::integer(const uint8_t* data, size_t bytes) const noexcept {
   const uint64_t r = raw(data, bytes);
-  double v;
   if (is_signed && length < 64) {
     const uint64_t m = uint64_t(1) << (length - 1);
-    v = double(int64_t((r ^ m) - m));
-  } else if (is_signed) {
-    v = double(int64_t(r));
-  } else {
-    v = double(r);
+    return int64_t((r ^ m) - m);
   }
+  return int64_t(r);
+}
+
+double DbcSignal::physical(const uint8_t* data, size_t bytes) const noexcept {
+  // An unsigned 64-bit value keeps its magnitude; every other is the integer.
+  const double v =
+      !is_signed && length == 64 ? double(raw(data, bytes)) : double(integer(data, bytes));
   return v * factor + offset;
 }
 

@@ -29,6 +29,9 @@ struct DbcSignal {
 
   // Raw bits of the signal in `data` (length bytes valid).
   uint64_t raw(const uint8_t* data, size_t length) const noexcept;
+  // The raw bits as the integer they are (sign-extended when signed): what
+  // VAL_ tables and value lists count.
+  int64_t integer(const uint8_t* data, size_t length) const noexcept;
   double physical(const uint8_t* data, size_t length) const noexcept;
   // Bytes a frame must have to carry every bit of the signal (either byte order).
   int bytes_spanned() const noexcept;

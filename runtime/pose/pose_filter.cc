@@ -59,9 +59,9 @@ PoseFilter::State PoseFilter::start(const PlanarPose& z) const noexcept {
   P(0, 0) = z.sigma_x * z.sigma_x;
   P(1, 1) = z.sigma_y * z.sigma_y;
   P(2, 2) = z.sigma_yaw * z.sigma_yaw;
-  // The estimate is the pose plus the place's bias plus its own noise: taken
-  // as the pose (bias 0), the pose's error is the bias's opposite's plus the
-  // noise's, hence the negative cross terms.
+  // The estimate is the pose plus the place's bias plus its own noise. Taken
+  // as the pose with no bias, the pose is off by the bias plus the noise and
+  // the bias by minus the bias: hence the negative cross terms.
   const double b2 = p_.place_sigma_m * p_.place_sigma_m;
   for (int i = 0; i < 2; ++i) {
     P(i, i) += b2;
@@ -216,8 +216,10 @@ PoseFilter::Output PoseFilter::step(const PlanarMotion* motion,
       }
     }
   }
-  if (fix_.count > 0 && radius95(fix_.P[0], fix_.P[1], fix_.P[6]) > p_.lost_radius_m)
-    fix_ = State{};
+  if (fix_.count > 0) {
+    const Eigen::Map<const Mat5> P(fix_.P);
+    if (radius95(P(0, 0), P(0, 1), P(1, 1)) > p_.lost_radius_m) fix_ = State{};
+  }
   Output o;
   if (fix_.count > 0) {
     o = output(fix_, 0);

@@ -204,12 +204,7 @@ bool CanOdometryDecoder::take_direction(const can::Frame& f, int64_t stamp_ns) n
     return false;
   }
   // The raw value, as the DBC's value table and reverse_values count it.
-  const uint64_t bits = direction_.signal.raw(f.data, f.len);
-  int64_t raw = int64_t(bits);
-  if (direction_.signal.is_signed && direction_.signal.length < 64 &&
-      (bits >> (direction_.signal.length - 1)) & 1u) {
-    raw = int64_t(bits | (~0ull << direction_.signal.length));
-  }
+  const int64_t raw = direction_.signal.integer(f.data, f.len);
   reversing_ = false;
   for (int v : reverse_values_) reversing_ = reversing_ || raw == v;
   direction_stamp_ns_ = stamp_ns;
