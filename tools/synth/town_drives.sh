@@ -12,6 +12,8 @@
 #       shipped model_bin/town_64.aprt)
 #   train_route{30,31,32,33}_{day,overcast,morning,noon}  four more such routes,
 #       added for the fifth continued run (docs/evaluation.md)
+#   train_route{34..41}_{day,overcast,morning,noon}  eight more such routes (two
+#       per light), added for the eighth continued run (docs/evaluation.md)
 #   val_haze   a separate 600 m drive under a light no training drive has (validation)
 #   val_route12_morning  a second validation drive: route seed 12, morning light
 #   val_route13_dusk     a third: route seed 13, dusk light
@@ -24,7 +26,7 @@
 #   test_mount_high  unseen route 24 by day, the camera mounted 0.25 m higher
 # Test drives are looked at once per shipped model; choices use the val_ drives
 # (the confidence is calibrated on val_haze, the validity gate chosen on the nine).
-# Deterministic; ~25 minutes on two cores, ~1.4 GB.
+# Deterministic; ~40 minutes on two cores, ~2 GB.
 #   tools/synth/town_drives.sh OUT [path/to/aprt_synth] [--only NAME]
 script=town_drives
 extra=""
@@ -48,6 +50,11 @@ render train_route30_day      --split train --route-seed 30 --lighting day --vie
 render train_route31_overcast --split train --route-seed 31 --lighting overcast --view-jitter $mild
 render train_route32_morning  --split train --route-seed 32 --lighting morning --view-jitter $mild
 render train_route33_noon     --split train --route-seed 33 --lighting noon --view-jitter $mild
+lights=(day overcast morning noon)
+for seed in 34 35 36 37 38 39 40 41; do
+  light=${lights[$(((seed - 34) % 4))]}
+  render "train_route${seed}_$light" --split train --route-seed $seed --lighting "$light" --view-jitter $mild
+done
 render val_haze   --split test --route-seed 11 --lighting haze --max-length 600
 render val_route12_morning --split test --route-seed 12 --lighting morning --max-length 600
 render val_route13_dusk --split test --route-seed 13 --lighting dusk --max-length 600
