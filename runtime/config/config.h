@@ -202,10 +202,8 @@ struct Config {
     // covariance. It chooses its measurements with its own limits on the
     // model's stated confidence (the track's stay strict for a run without
     // odometry, where the gate alone decides): PoseFilterParams, and the two
-    // limits below on the estimates it takes at all.
-    struct Filter : PoseFilterParams {
-      double estimate_max_radius_m = 60.0;  // the model's 95 % radius an estimate taken may state
-      double estimate_max_yaw_deg = 30.0;   // ... and its 95 % yaw half-interval
+    // limits on the estimates it takes at all (EstimateLimits).
+    struct Filter : PoseFilterParams, EstimateLimits {
     } filter;
   } sanity;
 

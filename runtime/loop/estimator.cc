@@ -54,9 +54,8 @@ PoseGateParams pose_gate_params(const Config& config) {
 OdometryFilterParams odometry_filter_params(const Config& config, const ModelMeta& meta) {
   const Config::Sanity::Filter& f = config.sanity.filter;
   OdometryFilterParams p;
-  p.filter = f;  // the filter's own part
-  p.estimate_max_radius_m = f.estimate_max_radius_m;
-  p.estimate_max_yaw_deg = f.estimate_max_yaw_deg;
+  p.filter = f;                         // the filter's own part
+  static_cast<EstimateLimits&>(p) = f;  // and what it takes at all
   fallback_sigma(config, meta, &p.fallback_sigma_m, &p.fallback_sigma_rad);
   return p;
 }

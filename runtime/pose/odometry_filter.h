@@ -31,11 +31,9 @@ struct FilteredPose {
   int refused = 0;
 };
 
-struct OdometryFilterParams {
+struct OdometryFilterParams : EstimateLimits {
   PoseFilterParams filter;
-  double estimate_max_radius_m = 60.0;  // the model's 95 % radius an estimate may have
-  double estimate_max_yaw_deg = 30.0;   // ... and its 95 % yaw half-interval
-  double fallback_sigma_m = 5.0;        // for a model without confidence outputs
+  double fallback_sigma_m = 5.0;  // for a model without confidence outputs
   double fallback_sigma_rad = 0.05;
 };
 

@@ -81,6 +81,13 @@ struct PoseFilterParams {
   double place_length_m = 5.0;
 };
 
+// The model's stated confidence an estimate may have for the odometry filter
+// (odometry_filter.h) to take it at all; sanity.filter's keys of these names.
+struct EstimateLimits {
+  double estimate_max_radius_m = 60.0;  // the model's 95 % horizontal radius
+  double estimate_max_yaw_deg = 30.0;   // ... and its 95 % yaw half-interval
+};
+
 // A planar estimate of base_link in the map with one standard deviation per axis.
 struct PlanarPose {
   double x = 0, y = 0, yaw = 0;
