@@ -6,8 +6,8 @@
 // with the filter's standard deviations as the pose's confidence.
 //
 // An estimate is a measurement when nothing flagged it and the model's own
-// 95 % regions are within the validity gate's limits (sanity.track's
-// max_radius_m, max_yaw_deg): the others move nothing. @rt after
+// 95 % regions are within the filter's EstimateLimits (sanity.filter's
+// estimate_max_radius_m, estimate_max_yaw_deg): the others move nothing. @rt after
 // construction: no allocation.
 #pragma once
 
