@@ -65,6 +65,25 @@ class Synth(unittest.TestCase):
             self.assertLess(images["night"].mean(), images[light].mean() - 20, light)
         self.assertGreater(images["night"].max(), 200, "no lit street light in view")
 
+    def test_sun_moves_the_shadows_not_the_route(self):
+        # The day preset's sun (135, 50) against the same colours with a low sun
+        # from another side: the same poses, a different image, both recorded.
+        synth(self.path("preset"), "--split", "test", "--frames", "3", "--lighting", "day")
+        synth(self.path("low"), "--split", "test", "--frames", "3", "--lighting", "day",
+              "--sun", "245,12")
+        self.assertEqual(read(self.path("preset/poses.txt")), read(self.path("low/poses.txt")))
+        a = load_image(self.path("preset"), "images/000002.png").astype(float)
+        b = load_image(self.path("low"), "images/000002.png").astype(float)
+        self.assertGreater(np.abs(a - b).mean(), 3.0)
+        meta = json.loads(read(self.path("low/dataset.json")))
+        self.assertEqual(meta["sun_deg"], [245.0, 12.0])
+        self.assertIn("--sun 245,12", meta["command"])
+        self.assertIsNone(json.loads(read(self.path("preset/dataset.json")))["sun_deg"])
+        for value in ("245,2", "400,20", "245"):
+            r = synth(self.path("bad"), "--sun", value, check=False)
+            self.assertEqual(r.returncode, 2, value)
+            self.assertIn("--sun", r.stderr)
+
     def test_training_routes_cover_every_street_both_ways(self):
         synth(self.path("t"), "--split", "train", "--route-seed", "3", "--spacing", "5",
               "--lane-jitter", "0.8")
@@ -146,7 +165,8 @@ class Synth(unittest.TestCase):
 
     def test_dataset_json_regenerates_the_drive(self):
         synth(self.path("a"), "--split", "test", "--route-seed", "4", "--frames", "5",
-              "--lighting", "noon", "--view-jitter", "0.5,0.1,1,2", "--max-length", "80")
+              "--lighting", "noon", "--view-jitter", "0.5,0.1,1,2", "--max-length", "80",
+              "--sun", "200.5,17")
         meta = json.loads(read(self.path("a/dataset.json")))
         self.assertEqual((meta["frames_limit"], meta["max_length_m"], meta["spacing_m"]),
                          (5, 80.0, 1.0))
@@ -160,7 +180,8 @@ class Synth(unittest.TestCase):
     def test_help_lists_the_options_and_the_data_split(self):
         r = subprocess.run([SYNTH, "--help"], capture_output=True, text=True)
         self.assertEqual(r.returncode, 0)
-        for word in ("--view-jitter", "--lighting", "--camera-mount", "training", "validation",
+        for word in ("--view-jitter", "--lighting", "--sun", "--camera-mount", "training",
+                     "validation",
                      "test", "[1.0]"):
             self.assertIn(word, r.stdout)
 

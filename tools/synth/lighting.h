@@ -15,6 +15,10 @@ namespace aprt::synth {
 // The preset of that name, or nullopt for a name that is none of kLightingNames.
 std::optional<Lighting> lighting_preset(std::string_view name);
 
+// Unit vector towards a sun at that azimuth (degrees from +x east,
+// counter-clockwise) and elevation (degrees above the horizon).
+Vec3 sun_direction(double azimuth_deg, double elevation_deg);
+
 inline constexpr const char* kLightingNames = "day|overcast|morning|noon|haze|dusk|night";
 
 }  // namespace aprt::synth

@@ -164,7 +164,8 @@ int run(int argc, char** argv) {
       return 1;
     }
   }
-  const Lighting L = *lighting_preset(o.lighting);  // checked by parse_options
+  Lighting L = *lighting_preset(o.lighting);  // checked by parse_options
+  if (o.sun_override) L.sun_dir = sun_direction(o.sun_azimuth_deg, o.sun_elevation_deg);
   const double pitch = o.cam_pitch_deg * kPi / 180;
   std::vector<std::string> lines(path.size()), lidar_lines(path.size());
   std::vector<int> failed(size_t(o.threads), 0);
@@ -237,10 +238,17 @@ int run(int argc, char** argv) {
   const double f = (o.width / 2.0) / std::tan(o.hfov_deg * kPi / 360.0);
   char maxlen[32];
   std::snprintf(maxlen, sizeof maxlen, o.max_length >= 1e9 ? "null" : "%.3f", o.max_length);
+  // The sun as given (null: the preset's); the command repeats it only when given.
+  char sun_json[48] = "null", sun_arg[48] = "";
+  if (o.sun_override) {
+    std::snprintf(sun_json, sizeof sun_json, "[%.4f, %.4f]", o.sun_azimuth_deg,
+                  o.sun_elevation_deg);
+    std::snprintf(sun_arg, sizeof sun_arg, " --sun %g,%g", o.sun_azimuth_deg, o.sun_elevation_deg);
+  }
   std::fprintf(
       j,
       "{\"generator\": \"aprt_synth\", \"split\": \"%s\", \"lighting\": \"%s\", "
-      "\"town_seed\": %u, \"route_seed\": %u, \"frames\": %zu,\n"
+      "\"sun_deg\": %s, \"town_seed\": %u, \"route_seed\": %u, \"frames\": %zu,\n"
       " \"frames_limit\": %d, \"max_length_m\": %s, \"spacing_m\": %.4f,\n"
       " \"camera\": {\"width\": %d, \"height\": %d, \"fx\": %.4f, \"fy\": %.4f, "
       "\"cx\": %.2f, \"cy\": %.2f, \"hfov_deg\": %.4f},\n"
@@ -251,21 +259,22 @@ int run(int argc, char** argv) {
       " \"town_extent_m\": %.1f, \"street_spacing_m\": %.1f, \"road_width_m\": %.1f,\n"
       " \"lane_jitter_m\": %.4f, \"lidar\": %s, \"images\": %s, \"beams\": %d,\n"
       " \"azimuths\": %d, \"lidar_range_m\": %.4f, \"lidar_noise_m\": %.4f,\n"
-      " \"command\": \"aprt_synth --split %s --lighting %s --town-seed %u --route-seed %u "
+      " \"command\": \"aprt_synth --split %s --lighting %s%s --town-seed %u --route-seed %u "
       "--frames %d%s%s --spacing %g --lane-jitter %g --view-jitter %g,%g,%g,%g --width %d "
       "--height %d --hfov %g --camera-mount %g,%g,%g,%g%s%s --beams %d --azimuths %d "
       "--lidar-range %g --lidar-noise %g --lidar-mount %g,%g,%g\"}\n",
-      o.split.c_str(), o.lighting.c_str(), o.town_seed, o.route_seed, path.size(), o.frames, maxlen,
-      o.spacing, o.width, o.height, f, f, o.width / 2.0 - 0.5, o.height / 2.0 - 0.5, o.hfov_deg,
-      o.cam_x, o.cam_y, o.cam_z, o.cam_pitch_deg, o.lidar_x, o.lidar_y, o.lidar_z, o.jitter_lateral,
-      o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg, town.extent, town.block,
-      2 * town.road_half, ro.lane_jitter, o.lidar ? "true" : "false", o.images ? "true" : "false",
-      o.beams, o.azimuths, o.lidar_range, o.lidar_noise, o.split.c_str(), o.lighting.c_str(),
-      o.town_seed, o.route_seed, o.frames, o.max_length >= 1e9 ? "" : " --max-length ",
-      o.max_length >= 1e9 ? "" : maxlen, o.spacing, ro.lane_jitter, o.jitter_lateral,
-      o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg, o.width, o.height, o.hfov_deg, o.cam_x,
-      o.cam_y, o.cam_z, o.cam_pitch_deg, o.lidar ? " --lidar" : "", o.images ? "" : " --no-images",
-      o.beams, o.azimuths, o.lidar_range, o.lidar_noise, o.lidar_x, o.lidar_y, o.lidar_z);
+      o.split.c_str(), o.lighting.c_str(), sun_json, o.town_seed, o.route_seed, path.size(),
+      o.frames, maxlen, o.spacing, o.width, o.height, f, f, o.width / 2.0 - 0.5,
+      o.height / 2.0 - 0.5, o.hfov_deg, o.cam_x, o.cam_y, o.cam_z, o.cam_pitch_deg, o.lidar_x,
+      o.lidar_y, o.lidar_z, o.jitter_lateral, o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg,
+      town.extent, town.block, 2 * town.road_half, ro.lane_jitter, o.lidar ? "true" : "false",
+      o.images ? "true" : "false", o.beams, o.azimuths, o.lidar_range, o.lidar_noise,
+      o.split.c_str(), o.lighting.c_str(), sun_arg, o.town_seed, o.route_seed, o.frames,
+      o.max_length >= 1e9 ? "" : " --max-length ", o.max_length >= 1e9 ? "" : maxlen, o.spacing,
+      ro.lane_jitter, o.jitter_lateral, o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg,
+      o.width, o.height, o.hfov_deg, o.cam_x, o.cam_y, o.cam_z, o.cam_pitch_deg,
+      o.lidar ? " --lidar" : "", o.images ? "" : " --no-images", o.beams, o.azimuths, o.lidar_range,
+      o.lidar_noise, o.lidar_x, o.lidar_y, o.lidar_z);
   std::fclose(j);
   std::printf("aprt_synth: %zu frames (%s, %s) -> %s\n", path.size(), o.split.c_str(),
               o.lighting.c_str(), o.out.c_str());

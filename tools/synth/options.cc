@@ -37,6 +37,8 @@ int help() {
       "  --view-jitter L,H,P,Y  per-frame random view: lateral offset +-L m, camera height\n"
       "                         +-H m, pitch +-P deg, yaw +-Y deg [0,0,0,0]\n"
       "  --lighting NAME        %s [%s]\n"
+      "  --sun AZ,EL            move the preset's sun: azimuth 0..360 deg from east,\n"
+      "                         counter-clockwise; elevation 5..85 deg [the preset's]\n"
       "  --width W --height H --hfov DEG   the pinhole camera [%d x %d, %.0f deg]\n"
       "  --camera-mount X,Y,Z,PITCH_DEG    camera on base_link [%.2f,%.2f,%.2f,%.1f]\n"
       "  --lidar                also ray-cast LiDAR scans (KITTI .bin) of the same poses\n"
@@ -48,11 +50,14 @@ int help() {
       "  --quiet                no progress lines on stderr\n"
       "\n"
       "The shipped model's data (tools/synth/town_drives.sh, docs/evaluation.md):\n"
-      "  training    route seeds 1-4 (split train) under day, overcast, morning, noon,\n"
-      "              and seeds 5, 6, 8, 9 with --view-jitter under the same four lights\n"
-      "  validation  route seed 11, haze, 600 m (chooses; never trained on)\n"
+      "  training    route seeds 1-6, 8, 9 and 26-41 (split train) under day, overcast,\n"
+      "              morning, noon (all but 1-4 with --view-jitter); seeds 42-49 under\n"
+      "              day, morning, noon with the sun moved low (--sun)\n"
+      "  validation  route seeds 11-19, 600 m, under all six daylight presets\n"
+      "              (chooses; never trained on)\n"
       "  test        route seed 7, dusk, 600 m (data/demo_drive), and the unseen routes\n"
-      "              21 (noon), 22 (dusk), 23 (haze), 600 m: looked at once per model\n"
+      "              21 (noon), 22 (dusk), 23 (haze), 24 (day, camera 0.25 m higher),\n"
+      "              600 m: looked at once per model\n"
       "haze and dusk light no training drive.\n",
       d.split.c_str(), d.town_seed, d.route_seed, d.frames, d.spacing, kLightingNames,
       d.lighting.c_str(), d.width, d.height, d.hfov_deg, d.cam_x, d.cam_y, d.cam_z, d.cam_pitch_deg,
@@ -171,7 +176,10 @@ int parse_options(int argc, char** argv, Options* out) {
       reals({&o.cam_x, &o.cam_y, &o.cam_z, &o.cam_pitch_deg});
     else if (a == "--view-jitter")
       reals({&o.jitter_lateral, &o.jitter_height, &o.jitter_pitch_deg, &o.jitter_yaw_deg});
-    else if (a == "--lidar-mount")
+    else if (a == "--sun") {
+      reals({&o.sun_azimuth_deg, &o.sun_elevation_deg});
+      o.sun_override = true;
+    } else if (a == "--lidar-mount")
       reals({&o.lidar_x, &o.lidar_y, &o.lidar_z});
     else if (a == "--threads")
       integer(&o.threads);
@@ -214,6 +222,14 @@ int parse_options(int argc, char** argv, Options* out) {
                  "aprt_synth: --view-jitter %g,%g,%g,%g out of range (lateral 0..2 m keeps the "
                  "camera on the road, height 0..1 m, pitch 0..20 deg, yaw 0..45 deg)\n",
                  o.jitter_lateral, o.jitter_height, o.jitter_pitch_deg, o.jitter_yaw_deg);
+    return 2;
+  }
+  if (o.sun_override && (o.sun_azimuth_deg < 0 || o.sun_azimuth_deg > 360 ||
+                         o.sun_elevation_deg < 5 || o.sun_elevation_deg > 85)) {
+    std::fprintf(stderr,
+                 "aprt_synth: --sun %g,%g out of range (azimuth 0..360 deg, elevation 5..85 deg: "
+                 "a sun at the horizon or overhead casts no shadow the presets lack)\n",
+                 o.sun_azimuth_deg, o.sun_elevation_deg);
     return 2;
   }
   if (o.lane_jitter > 2.0) {

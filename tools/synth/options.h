@@ -13,6 +13,11 @@ struct Options {
   std::string out;
   std::string split = "train";
   std::string lighting = "day";
+  // --sun AZ,EL: the lighting preset's colours with the sun moved to that
+  // azimuth and elevation (degrees), so training can see shadows fall in
+  // directions and lengths its presets do not have. Off: the preset's sun.
+  bool sun_override = false;
+  double sun_azimuth_deg = 0, sun_elevation_deg = 0;
   uint32_t town_seed = 1;
   uint32_t route_seed = 1;
   int frames = 0;  // 0: the whole route
