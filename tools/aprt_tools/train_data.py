@@ -91,7 +91,12 @@ def augment(x: torch.Tensor, gen: torch.Generator, strength: float = 1.0) -> tor
     r = lambda *shape: torch.rand(*shape, generator=gen)
     gain = 0.75 + 0.5 * r(n, 3, 1, 1)
     bright = 0.5 + 0.8 * r(n, 1, 1, 1)
-    x = x * gain * bright
+    # White balance: a colour-temperature shift, warm (a low sun: red up, blue
+    # down to 0.6) or cool (shade), correlated across the channels as light is;
+    # independent gains alone reach a red/blue ratio of 1.7, a low sun's is ~3.
+    temp = 2 * r(n, 1, 1, 1) - 1
+    white = torch.cat([1 + 0.2 * temp, torch.ones_like(temp), 1 - 0.4 * temp], dim=1)
+    x = x * gain * bright * white
     mean = x.mean(dim=(1, 2, 3), keepdim=True)
     x = (x - mean) * (0.6 + 0.8 * r(n, 1, 1, 1)) + mean
     haze = 0.35 * r(n, 1, 1, 1)
