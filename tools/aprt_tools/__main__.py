@@ -223,6 +223,22 @@ def cmd_drive_times(a):
           f"(mean {len(t) / max(t[-1], 1e-9):.1f} frames/s)")
 
 
+def cmd_choose(a):
+    from .choose import run
+
+    drives = [os.path.join(a.data_root, d) if a.data_root else d for d in a.drives]
+    try:
+        out = run(a.aprt, a.model, a.config, drives, a.grid or [], a.baseline_model,
+                  a.baseline_set, a.tolerance, a.jobs)
+    except (ValueError, RuntimeError, OSError) as e:
+        print(e, file=sys.stderr)
+        sys.exit(2)
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(out, f, indent=1)
+    sys.exit(0 if out["chosen"] is not None else 1)
+
+
 def cmd_odometry(a):
     from .odometry import write_odometry
 
@@ -432,6 +448,29 @@ def main(argv=None):
     od.add_argument("--seed", type=int, default=1)
     od.add_argument("--out", help="where to write (default FOLDER/odometry.txt)")
     od.set_defaults(fn=cmd_odometry)
+
+    ch = sub.add_parser("choose", help="choose the pose filter's keys on the validation drives "
+                                       "and compare a candidate model with a baseline "
+                                       "(the rule: aprt_tools/choose.py)")
+    ch.add_argument("--aprt", default="build/release/bin/aprt", help="the aprt binary")
+    ch.add_argument("--model", required=True, help="the model whose keys are chosen")
+    ch.add_argument("--config", default="config/default.yaml",
+                    help="the configuration the grid's keys are set in (default "
+                         "config/default.yaml)")
+    ch.add_argument("--drives", nargs="+", required=True,
+                    help="validation drives (folders with odometry.txt); never test drives")
+    ch.add_argument("--data-root", help="folder the drive names are relative to")
+    ch.add_argument("--grid", action="append", metavar="KEY=V1,V2",
+                    help="a key and its values (repeat for more keys; section.key where a key "
+                         "appears twice); no grid: the configuration as it is")
+    ch.add_argument("--baseline-model", help="the model to beat (e.g. the shipped one)")
+    ch.add_argument("--baseline-set", action="append", metavar="KEY=V",
+                    help="the baseline's keys where they differ from --config")
+    ch.add_argument("--tolerance", type=float, default=0.05,
+                    help="metres a light's worst published median may lose (default 0.05)")
+    ch.add_argument("--jobs", type=int, default=2, help="evaluations at once (default 2)")
+    ch.add_argument("--json", help="write every point's figures and the verdict here")
+    ch.set_defaults(fn=cmd_choose)
 
     pe = sub.add_parser("plot-eval", help="trajectory and error plot from `aprt eval --csv` files")
     pe.add_argument("csv", nargs="+", help="one or more CSV files (side by side)")
