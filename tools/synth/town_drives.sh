@@ -14,6 +14,9 @@
 #       added for the fifth continued run (docs/evaluation.md)
 #   train_route{34..41}_{day,overcast,morning,noon}  eight more such routes (two
 #       per light), added for the eighth continued run (docs/evaluation.md)
+#   train_route{42..49}_{day,morning,noon}_lowsun  eight more such routes, each
+#       with the sun moved low (10-25 deg) to a different azimuth (--sun), added
+#       for the ninth continued run (docs/evaluation.md)
 #   val_haze   a separate 600 m drive under a light no training drive has (validation)
 #   val_route12_morning  a second validation drive: route seed 12, morning light
 #   val_route13_dusk     a third: route seed 13, dusk light
@@ -54,6 +57,19 @@ lights=(day overcast morning noon)
 for seed in 34 35 36 37 38 39 40 41; do
   light=${lights[$(((seed - 34) % 4))]}
   render "train_route${seed}_$light" --split train --route-seed $seed --lighting "$light" --view-jitter $mild
+done
+# Low sun from every side (--sun): the training presets' suns stand at four
+# azimuths and 22-72 deg, so their shadows fall four ways; a low sun's long
+# shadows from other sides are what the unseen lights (haze, dusk) add, and
+# the dusk drives were where the eighth run did worst.
+# The sun's colours stay the preset's; no route here uses the haze or dusk preset.
+# Eight azimuths 45 deg apart from east, elevations 10 + 7k mod 20 deg.
+suns=(0,10 45,17 90,24 135,11 180,18 225,25 270,12 315,19)
+sun_lights=(day morning noon day morning noon day morning)
+for k in 0 1 2 3 4 5 6 7; do
+  seed=$((42 + k))
+  render "train_route${seed}_${sun_lights[$k]}_lowsun" --split train --route-seed $seed \
+    --lighting "${sun_lights[$k]}" --sun "${suns[$k]}" --view-jitter $mild
 done
 render val_haze   --split test --route-seed 11 --lighting haze --max-length 600
 render val_route12_morning --split test --route-seed 12 --lighting morning --max-length 600
