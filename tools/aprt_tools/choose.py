@@ -45,7 +45,9 @@ def override(text: str, key: str, value: str) -> str:
             raise ValueError(f"choose: section '{section}' appears {len(heads)} times in the "
                              "configuration (name one that appears exactly once)")
         start = heads[0]
-    pattern = re.compile(r"(?<![\w.])(" + re.escape(name) + r":[ \t]*)([^,}\n#]+?)(?=\s*(?:[,}\n#]|$))")
+    # The value: up to the next comma, brace, comment or line end.
+    pattern = re.compile(r"(?<![\w.])(" + re.escape(name) + r":[ \t]*)"
+                         r"([^,}\n#]+?)(?=\s*(?:[,}\n#]|$))")
     found = list(pattern.finditer(text, start))
     if not found or (not section and len(found) > 1):
         raise ValueError(f"choose: key '{key}' appears {len(found)} times in the configuration "
