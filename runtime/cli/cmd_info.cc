@@ -143,6 +143,10 @@ int cmd_info(int argc, char** argv) {
   } else {
     std::printf("validation   no measured error in the file\n");
   }
+  if (m.ensemble_members > 0) {
+    std::printf("ensemble     %u networks averaged in one graph (aprt_tools ensemble)\n",
+                unsigned(m.ensemble_members));
+  }
   if (m.has_uncertainty) {
     std::printf(
         "confidence   per pose: 13 outputs, calibration k %.3f (position), %.3f (rotation)\n",

@@ -43,6 +43,9 @@ struct ModelMeta {
   // the validation drive so that the 95 % regions hold 95 % of its errors.
   bool has_uncertainty = false;
   float uncertainty_scale[2] = {0.0f, 0.0f};
+  // 1.4: how many networks the graph averages (aprt_tools ensemble); 0 for
+  // one network. Informational: the graph itself does the averaging.
+  uint32_t ensemble_members = 0;
   const char* config_json = nullptr;  // points into the file; not NUL-terminated
   size_t config_json_bytes = 0;
   // How the file was quantised (method, calibration set, per-op policy) as

@@ -10,8 +10,8 @@ namespace aprt::format {
 
 inline constexpr char kMagic[8] = {'A', 'P', 'R', 'T', 'M', 'D', 'L', '\0'};
 inline constexpr uint16_t kVersionMajor = 1;
-inline constexpr uint16_t kVersionMinor =
-    3;  // 1.1: int8 weights; 1.2: point ops; 1.3: confidence (FORMAT.md)
+// 1.1: int8 weights; 1.2: point ops; 1.3: confidence; 1.4: ensembles (FORMAT.md)
+inline constexpr uint16_t kVersionMinor = 4;
 inline constexpr uint32_t kHeaderBytes = 64;
 inline constexpr uint32_t kSectionEntryBytes = 32;
 inline constexpr uint32_t kTensorEntryBytes = 64;
@@ -93,6 +93,7 @@ enum class MetaKey : uint16_t {
   kConfigJson = 41,
   kQuantization = 42,
   kUncertainty = 43,
+  kEnsemble = 44,
   kBev = 50,
   kPoints = 51,
 };

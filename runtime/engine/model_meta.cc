@@ -116,7 +116,8 @@ Status parse_model_meta(const uint8_t* data, uint64_t size, ModelMeta* out) {
       case MetaKey::kNHeads:
       case MetaKey::kEncLayers:
       case MetaKey::kDecLayers:
-      case MetaKey::kDimFeedforward: {
+      case MetaKey::kDimFeedforward:
+      case MetaKey::kEnsemble: {
         if (!(st = expect(MetaType::kU32, 1, 1))) return st;
         const uint32_t x = load<uint32_t>(v);
         APRT_ENSURE(x <= 65536, Errc::kBadMetadata, "model_bin: META key %u = %u is absurd",
@@ -126,6 +127,7 @@ Status parse_model_meta(const uint8_t* data, uint64_t size, ModelMeta* out) {
         if (key == MetaKey::kEncLayers) m.enc_layers = x, mark(10);
         if (key == MetaKey::kDecLayers) m.dec_layers = x, mark(11);
         if (key == MetaKey::kDimFeedforward) m.dim_feedforward = x;
+        if (key == MetaKey::kEnsemble) m.ensemble_members = x;
         break;
       }
       case MetaKey::kValError: {

@@ -1,7 +1,8 @@
 // Golden tests: the engine against PyTorch (or upstream's ONNX Runtime run).
 //
 // APRT_GOLDEN_DIR names a folder written by `python3 -m aprt_tools golden
-// --convert`: model.aprt, in_K.f32 (NCHW, normalised) and out_K.f32 (7 values).
+// --convert` (or golden-ensemble): model.aprt, in_K.f32 (NCHW, normalised) and
+// out_K.f32 (the model's 7 values, 13 with the confidence outputs).
 // The error measure: for each output i, |got_i - want_i| / max(|want_i|, 0.1 * max_j |want_j|),
 // i.e. relative, with a floor at a tenth of the largest output so that values
 // near zero are judged on the output's scale. The bound is 1e-4, or
@@ -67,7 +68,7 @@ TEST(Golden, MatchesReference) {
     const auto x = test::read_f32(dir + "/in_" + std::to_string(k) + ".f32");
     const auto want = test::read_f32(dir + "/out_" + std::to_string(k) + ".f32");
     ASSERT_EQ(x.size(), e.input().numel);
-    ASSERT_EQ(want.size(), 7u);
+    ASSERT_EQ(want.size(), e.output().numel);
     const auto nhwc = test::nchw_to_nhwc(x, int(shape[3]), int(shape[1]), int(shape[2]));
     std::memcpy(e.input().f32(), nhwc.data(), nhwc.size() * sizeof(float));
     ASSERT_TRUE(e.run());

@@ -140,6 +140,7 @@ std::vector<uint8_t> ModelBuilder::build() const {
   if (!uncertainty.empty()) {
     meta_record(meta, 43, 2, uncertainty.data(), uint32_t(uncertainty.size() * 4));
   }
+  if (!ensemble.empty()) meta_record(meta, 44, 1, ensemble.data(), uint32_t(ensemble.size() * 4));
   meta_record(meta, 31, 1, &d_model, 4);
   meta_record(meta, 32, 1, &nheads, 4);
   meta_record(meta, 33, 1, &enc_layers, 4);

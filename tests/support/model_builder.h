@@ -47,6 +47,7 @@ class ModelBuilder {
   std::vector<float> bev;     // META 'bev' (cell, x_min, y_min, threshold, clip) when not empty
   std::vector<float> points;  // META 'points' (crop radius, coordinate scale) when not empty
   std::vector<float> uncertainty;  // META 'uncertainty' (position, rotation scales) when not empty
+  std::vector<uint32_t> ensemble;  // META 'ensemble' (member count) when not empty
   std::vector<float> pose_min{0, 0, 0}, pose_max{10, 20, 5};
   std::vector<float> norm_std;  // META 'norm_std' when not empty (else 0.25 per channel)
   bool norm_std_first = false;  // write norm_std before norm_mean

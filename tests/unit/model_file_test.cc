@@ -242,6 +242,21 @@ TEST(ModelFile, ConfidenceOutputsNeedTheirCalibration) {
   expect_error(count, Errc::kBadMetadata, "META key 43 has 4 bytes");
 }
 
+// model_bin 1.4: the member count of an ensemble is read and reported; a
+// record of the wrong size is refused like any other.
+TEST(ModelFile, ReadsTheEnsembleMemberCount) {
+  auto three = test::make_small_model([](ModelBuilder& m) { m.ensemble = {3}; });
+  auto file = parse(three);
+  ASSERT_TRUE(file) << file.error().message();
+  EXPECT_EQ(file.value().meta().ensemble_members, 3u);
+  auto plain = test::make_small_model([](ModelBuilder&) {});
+  auto one = parse(plain);
+  ASSERT_TRUE(one);
+  EXPECT_EQ(one.value().meta().ensemble_members, 0u);
+  auto count = test::make_small_model([](ModelBuilder& m) { m.ensemble = {3, 4}; });
+  expect_error(count, Errc::kBadMetadata, "META key 44 has 8 bytes");
+}
+
 TEST(ModelFile, RefusesAbsurdShapes) {
   auto huge = test::make_small_model([](ModelBuilder& m) {
     m.set_dims(m.tensor_index("dw.out"), {1, 1 << 21, 4, 8});

@@ -60,6 +60,15 @@ def cmd_golden_int8(a):
     print(f"golden-int8: {a.source} -> {a.out} ({m['ops']} int8 ops, {m['frames']} frames)")
 
 
+def cmd_golden_ensemble(a):
+    from .golden import make_golden_ensemble
+    from .model.apr_transformer import AprConfig
+
+    m = make_golden_ensemble(AprConfig.named(a.config), a.out, members=a.members, seed=a.seed)
+    print(f"golden-ensemble: {a.config} -> {a.out} ({m['report']}; relative output spread "
+          f"{m['min_relative_spread']:.2f})")
+
+
 def cmd_export(a):
     import torch
 
@@ -186,6 +195,30 @@ def cmd_train(a):
         cmd_quantize(a)
 
 
+def cmd_ensemble(a):
+    from .ensemble import calibrated, extract
+    from .model_bin.reader import ModelBinError
+
+    try:
+        if a.extract is not None:
+            if len(a.models) != 1:
+                raise ValueError("--extract takes one ensemble file")
+            blob = extract(open(a.models[0], "rb").read(), a.extract)
+            report = (f"member {a.extract} of {a.models[0]} (uncalibrated: `confidence "
+                      f"{a.output} --val DRIVE` before running it; `train --init` as it is)")
+        else:
+            if not a.val:
+                raise ValueError("--val DRIVE is required: the runtime refuses confidence "
+                                 "outputs without their calibration")
+            blob, report = calibrated([open(m, "rb").read() for m in a.models], a.models, a.val)
+    except (ModelBinError, OSError, ValueError) as e:
+        print(f"ensemble: {e}", file=sys.stderr)
+        sys.exit(2)
+    with open(a.output, "wb") as f:
+        f.write(blob)
+    print(f"ensemble: {a.output}: {report}")
+
+
 def cmd_confidence(a):
     from .confidence import calibrate_file
     from .model_bin.reader import ModelBinError
@@ -308,6 +341,14 @@ def main(argv=None):
     g.add_argument("--out", required=True)
     g.set_defaults(fn=cmd_golden)
 
+    ge = sub.add_parser("golden-ensemble", help="an ensemble of varied-weight models with "
+                        "confidence heads; inputs and the mean of their PyTorch outputs")
+    ge.add_argument("--config", default="tiny", choices=("tiny", "tiny-bev"))
+    ge.add_argument("--members", type=int, default=2)
+    ge.add_argument("--seed", type=int, default=1)
+    ge.add_argument("--out", required=True)
+    ge.set_defaults(fn=cmd_golden_ensemble)
+
     gi = sub.add_parser("golden-int8", help="quantise a golden model; expected int8 outputs")
     gi.add_argument("source", help="folder written by golden --convert")
     gi.add_argument("--out", required=True)
@@ -367,6 +408,17 @@ def main(argv=None):
     cf.add_argument("--val", required=True, help="a labelled drive no training used")
     cf.add_argument("-o", "--output", help="where to write (default: the model file itself)")
     cf.set_defaults(fn=cmd_confidence)
+
+    en = sub.add_parser("ensemble", help="several fp32 models of one configuration as one "
+                        "model file that averages them, its confidence calibrated on --val")
+    en.add_argument("models", nargs="+", help="2 to 8 fp32 model files with confidence "
+                    "outputs, one configuration and position bounds")
+    en.add_argument("-o", "--output", required=True)
+    en.add_argument("--val", help="the labelled validation drive to calibrate the "
+                    "confidence on (as `confidence` does for one model); required to build")
+    en.add_argument("--extract", type=int, metavar="I", help="instead: write member I of the "
+                    "one ensemble file given (to continue training from it)")
+    en.set_defaults(fn=cmd_ensemble)
 
     t = sub.add_parser("train", help="train the reference model on a DeepLoc-layout sequence (CPU)")
     t.add_argument("--data", required=True, nargs="+",

@@ -97,3 +97,46 @@ def make_golden_int8(src_dir: str, out_dir: str, method: str = "percentile",
         y = engine_ir.run(eg, {inp: x})[id(out)]
         np.asarray(y, "<f4").tofile(os.path.join(out_dir, f"out_{k}.f32"))
     return dict(ops=len(report.ops), frames=report.frames)
+
+
+def make_golden_ensemble(cfg: AprConfig, out_dir: str, *, members: int = 2, seed: int = 1,
+                         count: int = 3) -> dict:
+    """Golden data for an ensemble file (ensemble.py): `members` varied-weight
+    networks with confidence heads, converted, laid into one graph; the
+    expected outputs are the mean of the PyTorch members' 13 outputs."""
+    from .convert.convert import convert
+    from .ensemble import build
+    from .model_bin.writer import serialise
+
+    os.makedirs(out_dir, exist_ok=True)
+    cfg.uncertainty = True
+    config = json.loads(cfg.to_json())
+    models, blobs = [], []
+    for i in range(members):
+        torch.manual_seed(seed + i)
+        model = vary(AprTransformer(cfg), seed + i).eval()
+        blob, _ = convert(export_onnx(model, 13), config=config)
+        models.append(model)
+        blobs.append(blob)
+    graph, meta = build(blobs, [f"member {i}" for i in range(members)])
+    meta["uncertainty"] = [1.0, 1.0]  # the raw outputs are compared; the scales are not used
+    with open(os.path.join(out_dir, "model.aprt"), "wb") as f:
+        f.write(serialise(graph, meta))
+    report = f"{members} members, {len(graph.ops)} ops"
+    gen = torch.Generator().manual_seed(seed + 1000)
+    inputs = [torch.randn(*cfg.input_shape(), generator=gen)]
+    inputs += [sample_inputs(1, cfg, gen) for _ in range(count - 1)]
+    outs = []
+    with torch.no_grad():
+        for k, x in enumerate(inputs):
+            y = torch.stack([m(x) for m in models]).mean(dim=0)
+            x.numpy().astype("<f4").tofile(os.path.join(out_dir, f"in_{k}.f32"))
+            y.numpy().astype("<f4").tofile(os.path.join(out_dir, f"out_{k}.f32"))
+            outs.append(y.numpy().reshape(-1))
+    outs = np.stack(outs)
+    spread = float((outs.std(axis=0) / (np.abs(outs).mean(axis=0) + 1e-9)).min())
+    with open(os.path.join(out_dir, "golden.json"), "w") as f:
+        json.dump(dict(config=config, seed=seed, members=members, count=count,
+                       input_shape=list(cfg.input_shape()), min_relative_spread=spread,
+                       outputs=outs.tolist(), report=report), f, indent=1)
+    return dict(report=report, min_relative_spread=spread)

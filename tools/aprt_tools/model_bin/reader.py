@@ -69,7 +69,7 @@ def _meta(blob: bytes) -> dict:
         else:
             out[name] = bytes(v)
     for k in ("modality", "resize_policy", "d_model", "nheads", "enc_layers", "dec_layers",
-              "dim_feedforward"):
+              "dim_feedforward", "ensemble"):
         if k in out and len(out[k]) == 1:
             out[k] = out[k][0]
     return out

@@ -6,7 +6,9 @@ tests/tools/test_spec_agreement.py checks that the two agree.
 
 MAGIC = b"APRTMDL\x00"
 VERSION_MAJOR = 1
-VERSION_MINOR = 3  # 1.1: int8 weights, 'quantization'; 1.2: the PointNet++ ops, 'points'; 1.3: 'uncertainty'
+# 1.1: int8 weights, 'quantization'; 1.2: the PointNet++ ops, 'points';
+# 1.3: 'uncertainty'; 1.4: 'ensemble'
+VERSION_MINOR = 4
 HEADER_BYTES = 64
 SECTION_ENTRY_BYTES = 32
 TENSOR_ENTRY_BYTES = 64
@@ -85,6 +87,8 @@ META_KEYS = {
     42: (T_STR, "quantization"),  # JSON: method, calibration set, per-op policy
     # 1.3: the calibration scales (position, rotation) of the confidence outputs 7..12
     43: (T_F32, "uncertainty"),
+    # 1.4: the number of member networks averaged by the graph (aprt_tools ensemble)
+    44: (T_U32, "ensemble"),
     # LiDAR BEV (modality 2): cell_m, x_min, y_min, height_threshold_m, clip_count
     50: (T_F32, "bev"),
     # LiDAR points (modality 3): crop_radius_m, coord_scale_m

@@ -295,6 +295,9 @@ def load(data: bytes, frames: torch.Tensor | None = None):
     graph, meta = reader.read(data)
     if any(t.dtype != spec.DTYPE_F32 for t in graph.tensors if t.kind == spec.KIND_CONST):
         raise ToTorchError("an int8 file: continue from its fp32 source instead")
+    if "ensemble" in meta:
+        raise ToTorchError(f"an ensemble of {meta['ensemble']} networks: continue from one of "
+                           "its members instead")
     cfg = config_of(meta)
     if cfg.points:
         raise ToTorchError("raw-points models cannot be read back yet (image and BEV only)")
