@@ -180,7 +180,8 @@ def calibrated(files: list[bytes], names: list[str], val: str):
     """The ensemble file's bytes, its confidence calibrated on the labelled
     drive `val` (the members' averaged outputs, as the graph computes them:
     the runtime refuses confidence outputs without a calibration), and a report."""
-    from .confidence import coverage, fit, rotation_errors
+    from .confidence import coverage, fit
+    from .dataset import orientation_error_deg
     from .model_bin.writer import serialise
 
     graph, meta = build(files, names)
@@ -191,7 +192,8 @@ def calibrated(files: list[bytes], names: list[str], val: str):
     meta["uncertainty"] = [k_pos, k_rot]
     lo, hi = np.asarray(cfg.pose_min), np.asarray(cfg.pose_max)
     position = np.linalg.norm(raw[:, :3] * (hi - lo) + lo - pos, axis=1)
-    angle = np.degrees(np.linalg.norm(rotation_errors(raw[:, 3:7], quat), axis=1))
+    # The same measures as `train` records for one network.
+    angle = [orientation_error_deg(q, t) for q, t in zip(raw[:, 3:7], quat)]
     meta["val_error"] = [float(np.median(position)), float(np.median(angle))]
     report = (f"{len(files)} members, {len(graph.ops)} ops; validation median "
               f"{meta['val_error'][0]:.2f} m, {meta['val_error'][1]:.2f} deg; k_position {k_pos:.3f}, "

@@ -21,6 +21,36 @@ from .model.weights import sample_inputs, vary
 MIN_SPREAD = 0.05  # std across inputs / mean magnitude, per output, at least
 
 
+def _write_cases(cfg: AprConfig, out_dir: str, forward, seed: int, count: int, **extra) -> dict:
+    """`count` inputs (the first random, the rest sample-like; all sampled
+    scans for points models) and `forward`'s outputs for them as in_K.f32 /
+    out_K.f32, and golden.json (with `extra`); refuses outputs that barely vary."""
+    gen = torch.Generator().manual_seed(seed + 1000)
+    if cfg.points:  # scans: random points would make FPS and the ball query meaningless
+        inputs = [sample_inputs(1, cfg, gen) for _ in range(count)]
+    else:
+        inputs = [torch.randn(*cfg.input_shape(), generator=gen)]
+        inputs += [sample_inputs(1, cfg, gen) for _ in range(count - 1)]
+    outs = []
+    with torch.no_grad():
+        for k, x in enumerate(inputs):
+            y = forward(x)
+            x.numpy().astype("<f4").tofile(os.path.join(out_dir, f"in_{k}.f32"))
+            y.numpy().astype("<f4").tofile(os.path.join(out_dir, f"out_{k}.f32"))
+            outs.append(y.numpy().reshape(-1))
+    outs = np.stack(outs)
+    spread = float((outs.std(axis=0) / (np.abs(outs).mean(axis=0) + 1e-9)).min())
+    manifest = dict(config=json.loads(cfg.to_json()), seed=seed, **extra, count=count,
+                    input_shape=list(cfg.input_shape()),
+                    min_relative_spread=spread, outputs=outs.tolist())
+    with open(os.path.join(out_dir, "golden.json"), "w") as f:
+        json.dump(manifest, f, indent=1)
+    if count > 1 and spread < MIN_SPREAD:
+        raise RuntimeError(f"outputs barely vary across inputs (relative spread {spread:.3f} < "
+                           f"{MIN_SPREAD}): the golden data would prove nothing")
+    return manifest
+
+
 def make_golden(cfg: AprConfig, out_dir: str, *, seed: int = 1, opset: int = 13,
                 count: int = 3, portable: bool = False) -> dict:
     """portable: also write model_portable.onnx, the points model's PointNet++
@@ -36,30 +66,7 @@ def make_golden(cfg: AprConfig, out_dir: str, *, seed: int = 1, opset: int = 13,
             f.write(export_onnx(model, opset, portable=True))
     with open(os.path.join(out_dir, "model.json"), "w") as f:
         f.write(cfg.to_json())
-    gen = torch.Generator().manual_seed(seed + 1000)
-    if cfg.points:  # scans: random points would make FPS and the ball query meaningless
-        inputs = [sample_inputs(1, cfg, gen) for _ in range(count)]
-    else:
-        inputs = [torch.randn(*cfg.input_shape(), generator=gen)]
-        inputs += [sample_inputs(1, cfg, gen) for _ in range(count - 1)]
-    outs = []
-    with torch.no_grad():
-        for k, x in enumerate(inputs):
-            y = model(x)
-            x.numpy().astype("<f4").tofile(os.path.join(out_dir, f"in_{k}.f32"))
-            y.numpy().astype("<f4").tofile(os.path.join(out_dir, f"out_{k}.f32"))
-            outs.append(y.numpy().reshape(-1))
-    outs = np.stack(outs)
-    spread = float((outs.std(axis=0) / (np.abs(outs).mean(axis=0) + 1e-9)).min())
-    manifest = dict(config=json.loads(cfg.to_json()), seed=seed, opset=opset, count=count,
-                    input_shape=list(cfg.input_shape()),
-                    min_relative_spread=spread, outputs=outs.tolist())
-    with open(os.path.join(out_dir, "golden.json"), "w") as f:
-        json.dump(manifest, f, indent=1)
-    if count > 1 and spread < MIN_SPREAD:
-        raise RuntimeError(f"outputs barely vary across inputs (relative spread {spread:.3f} < "
-                           f"{MIN_SPREAD}): the golden data would prove nothing")
-    return manifest
+    return _write_cases(cfg, out_dir, model, seed, count, opset=opset)
 
 
 def make_golden_int8(src_dir: str, out_dir: str, method: str = "percentile",
@@ -122,21 +129,8 @@ def make_golden_ensemble(cfg: AprConfig, out_dir: str, *, members: int = 2, seed
     meta["uncertainty"] = [1.0, 1.0]  # the raw outputs are compared; the scales are not used
     with open(os.path.join(out_dir, "model.aprt"), "wb") as f:
         f.write(serialise(graph, meta))
-    report = f"{members} members, {len(graph.ops)} ops"
-    gen = torch.Generator().manual_seed(seed + 1000)
-    inputs = [torch.randn(*cfg.input_shape(), generator=gen)]
-    inputs += [sample_inputs(1, cfg, gen) for _ in range(count - 1)]
-    outs = []
-    with torch.no_grad():
-        for k, x in enumerate(inputs):
-            y = torch.stack([m(x) for m in models]).mean(dim=0)
-            x.numpy().astype("<f4").tofile(os.path.join(out_dir, f"in_{k}.f32"))
-            y.numpy().astype("<f4").tofile(os.path.join(out_dir, f"out_{k}.f32"))
-            outs.append(y.numpy().reshape(-1))
-    outs = np.stack(outs)
-    spread = float((outs.std(axis=0) / (np.abs(outs).mean(axis=0) + 1e-9)).min())
-    with open(os.path.join(out_dir, "golden.json"), "w") as f:
-        json.dump(dict(config=config, seed=seed, members=members, count=count,
-                       input_shape=list(cfg.input_shape()), min_relative_spread=spread,
-                       outputs=outs.tolist(), report=report), f, indent=1)
-    return dict(report=report, min_relative_spread=spread)
+    manifest = _write_cases(cfg, out_dir,
+                            lambda x: torch.stack([m(x) for m in models]).mean(dim=0), seed, count,
+                            members=members)
+    return dict(report=f"{members} members, {len(graph.ops)} ops",
+                min_relative_spread=manifest["min_relative_spread"])
