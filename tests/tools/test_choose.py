@@ -127,6 +127,28 @@ class Rule(unittest.TestCase):
         self.assertEqual(compare(cand, base, 0.05), [])
         self.assertEqual(len(compare(dict(cand, in_band=6), base, 0.05)), 1)
 
+    def test_a_gain_the_drives_cannot_resolve_stops_the_candidate(self):
+        # Per-drive differences of the fourteen validation drives when the
+        # shipped file's keys were swept again: mean -0.010 m, standard error
+        # 0.011 m. The same in the band and no light worse: not resolvable.
+        base_m = [0.77, 0.64, 0.62, 0.79, 0.55, 0.87, 0.69, 0.88, 0.65, 0.87, 0.76, 1.16, 1.16, 0.92]
+        diff = [-0.011, 0.021, -0.045, -0.001, 0.003, -0.004, 0.013, 0.08, -0.024, -0.028,
+                0.025, -0.072, -0.041, -0.061]
+        cand_m = [b + d for b, d in zip(base_m, diff)]
+        base = {"admissible": True, "reasons": [], "worst_per_light": {"day": 0.92},
+                "in_band": 12, "published_medians": base_m,
+                "mean_published": sum(base_m) / len(base_m)}
+        cand = dict(base, published_medians=cand_m, mean_published=sum(cand_m) / len(cand_m))
+        why = compare(cand, base, 0.05)
+        self.assertEqual(len(why), 1, why)
+        self.assertIn("less than twice its standard error over the 14 drives", why[0])
+        # More drives in the band is a gain of its own.
+        self.assertEqual(compare(dict(cand, in_band=13), base, 0.05), [])
+        # A gain of 0.08 m on every drive but one is resolvable.
+        big = [b - 0.08 for b in base_m[:-1]] + [base_m[-1]]
+        self.assertEqual(compare(dict(base, published_medians=big,
+                                      mean_published=sum(big) / len(big)), base, 0.05), [])
+
     def test_a_failing_eval_is_an_error_with_the_drive(self):
         with self.assertRaises(RuntimeError) as e:
             run("/bin/false", "m", self.config, self.drives[:1], [], log=lambda _: None)
