@@ -171,7 +171,8 @@ def cmd_train(a):
                            modality=a.modality, config=preset, inputs=a.inputs,
                            inputs_every=a.inputs_every, val=a.val, augment_from=a.augment_from,
                            init=a.init, workers=a.workers, uncertainty=a.uncertainty,
-                           ema=a.ema, resize=resize, bev_span_m=a.bev_span)
+                           ema=a.ema, resize=resize, bev_span_m=a.bev_span,
+                           chroma=a.chroma)
     except (OSError, ValueError) as e:
         print(f"train: {e}", file=sys.stderr)
         sys.exit(2)
@@ -435,6 +436,9 @@ def main(argv=None):
                         "the average (default 0: the weights as trained)")
     t.add_argument("--augment-from", type=float, default=0.3,
                    help="fraction of the budget before colour augmentation ramps in (image)")
+    t.add_argument("--chroma", action="store_true",
+                   help="the colour augmentation also turns hue (+-25 deg) and scales "
+                        "saturation (0.2-1.4, a tenth of the frames grey)")
     t.add_argument("--out", required=True)
     t.add_argument("--size", type=int, default=None,
                    help="image side / BEV grid (default 128), or points sampled (default 4096); "

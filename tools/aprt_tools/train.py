@@ -51,13 +51,14 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
           inputs: str | None = None, inputs_every: int = 1, val: str | None = None,
           augment_from: float = 0.3, init: str | None = None, workers: int = 1,
           uncertainty: bool = False, ema: float = 0.0, resize: int | None = None,
-          bev_span_m: float = 32.0, log=print):
+          bev_span_m: float = 32.0, chroma: bool = False, log=print):
     """data: one sequence folder or a list of them (several drives, e.g. under
     different light), trained on together. val: a separate drive whose errors
     are reported each epoch and recorded as the model's `val_error`; without
     it a contiguous tenth of the (first) route is held out instead.
     augment_from: the fraction of the budget before colour augmentation starts
-    ramping in (it reaches full strength 0.4 later).
+    ramping in (it reaches full strength 0.4 later). chroma: the augmentation
+    also turns hue and saturation (train_data.augment).
     init: a checkpoint.pth this trainer wrote, or a model file (.aprt, fp32)
     converted from one; training continues from its weights (and a
     checkpoint's learned loss weights), with its configuration and position
@@ -165,6 +166,7 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     pos_n = (pos - lo) / (hi - lo)
     plan = dict(cfg=cfg.to_json(), lo=lo, hi=hi, lr=lr, batch=batch, seed=seed, ema=ema,
                 warmup_steps=warmup_steps, budget=minutes * 60.0, augment_from=augment_from,
+                chroma=chroma,
                 modality=modality, out=out, folders=folders, val=val, tr=tr,
                 threads=max(1, threads // workers))
     data = (imgs, pos_n, quat, v_imgs, v_pos, v_quat)
@@ -364,7 +366,8 @@ def _fit(rank: int, world: int, plan: dict, data: tuple, model, loss_fn, log):
             if cfg.points:
                 x = imgs[idx]
             else:
-                x = normalise(augment(imgs[idx].float() / 255.0, aug_gen, strength), cfg.mean,
+                x = normalise(augment(imgs[idx].float() / 255.0, aug_gen, strength,
+                                          plan.get("chroma", False)), cfg.mean,
                               cfg.std)
             loss, lp, lq = objective(x, pos_n[idx], quat[idx])
             opt.zero_grad()

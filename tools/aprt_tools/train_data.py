@@ -4,6 +4,7 @@ augmentation, the held-out stretch."""
 
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
@@ -80,10 +81,34 @@ def network_input(frames: torch.Tensor, cfg) -> torch.Tensor:
     return normalise(frames.float() / 255.0, cfg.mean, cfg.std)
 
 
-def augment(x: torch.Tensor, gen: torch.Generator, strength: float = 1.0) -> torch.Tensor:
+# RGB <-> YIQ (NTSC): Y is the luma, (I, Q) the chroma plane that a hue
+# rotation turns and a saturation change scales.
+_RGB_TO_YIQ = torch.tensor([[0.299, 0.587, 0.114],
+                            [0.596, -0.274, -0.322],
+                            [0.211, -0.523, 0.312]])
+_YIQ_TO_RGB = torch.linalg.inv(_RGB_TO_YIQ)
+
+
+def chroma_matrices(hue_rad: torch.Tensor, saturation: torch.Tensor) -> torch.Tensor:
+    """(N,) hue rotations and saturation factors -> (N, 3, 3) RGB colour matrices
+    that keep the luma: the chroma plane turned by the hue and scaled."""
+    n = hue_rad.shape[0]
+    c, s = torch.cos(hue_rad) * saturation, torch.sin(hue_rad) * saturation
+    m = torch.zeros(n, 3, 3)
+    m[:, 0, 0] = 1.0
+    m[:, 1, 1], m[:, 1, 2], m[:, 2, 1], m[:, 2, 2] = c, -s, s, c
+    return _YIQ_TO_RGB @ m @ _RGB_TO_YIQ
+
+
+def augment(x: torch.Tensor, gen: torch.Generator, strength: float = 1.0,
+            chroma: bool = False) -> torch.Tensor:
     """x: (N, 3, S, S) in [0, 1]; lighting and sensor changes, never geometry.
 
-    strength in [0, 1] blends between the clean and the fully augmented image."""
+    strength in [0, 1] blends between the clean and the fully augmented image.
+    chroma: also turn the hue (+-25 deg) and scale the saturation (0.2-1.4, a
+    tenth of the frames grey), so that a place is not known by its facade
+    colours alone: an unseen light (dusk's orange sun, purple sky) moves them.
+    Off by default, which keeps the random stream of runs made without it."""
     if strength <= 0.0:
         return x
     clean = x
@@ -97,6 +122,10 @@ def augment(x: torch.Tensor, gen: torch.Generator, strength: float = 1.0) -> tor
     temp = 2 * r(n, 1, 1, 1) - 1
     white = torch.cat([1 + 0.2 * temp, torch.ones_like(temp), 1 - 0.4 * temp], dim=1)
     x = x * gain * bright * white
+    if chroma:
+        hue = (2 * r(n) - 1) * math.radians(25.0)
+        sat = torch.where(r(n) < 0.1, torch.zeros(n), 0.2 + 1.2 * r(n))
+        x = torch.einsum("nij,njhw->nihw", chroma_matrices(hue, sat), x)
     mean = x.mean(dim=(1, 2, 3), keepdim=True)
     x = (x - mean) * (0.6 + 0.8 * r(n, 1, 1, 1)) + mean
     haze = 0.35 * r(n, 1, 1, 1)
