@@ -28,6 +28,7 @@ import itertools
 import json
 import os
 import re
+import statistics
 import subprocess
 import tempfile
 
@@ -117,21 +118,18 @@ def rank(summary: dict) -> tuple:
 
 
 def unresolved_gain(candidate: dict, baseline: dict) -> str | None:
-    """Why the candidate's lower mean published median is not a resolvable gain
-    (None: it is, or the drives do not pair). The drives are paired: the
-    standard error is that of the per-drive differences."""
+    """For a candidate whose mean published median is no worse: why its gain is
+    not resolvable (None: it is, or the drives do not pair). The drives are
+    paired, so the standard error is that of the per-drive differences."""
     c, b = candidate.get("published_medians"), baseline.get("published_medians")
     if not c or not b or len(c) != len(b) or len(c) < 3:
         return None
-    d = [x - y for x, y in zip(c, b)]
-    mean = sum(d) / len(d)
-    if mean > 0:
-        return None  # worse, said by compare
-    se = (sum((x - mean) ** 2 for x in d) / (len(d) - 1) / len(d)) ** 0.5
-    if mean < 0 and -mean >= 2 * se:
+    gain = [y - x for x, y in zip(c, b)]
+    mean, se = statistics.mean(gain), statistics.stdev(gain) / len(gain) ** 0.5
+    if mean > 0 and mean >= 2 * se:
         return None
-    return (f"mean published median gain {-mean:.3f} m is less than twice its standard error "
-            f"over the {len(d)} drives ({2 * se:.3f} m)")
+    return (f"mean published median gain {mean:.3f} m is less than twice its standard error "
+            f"over the {len(gain)} drives ({2 * se:.3f} m)")
 
 
 def compare(candidate: dict, baseline: dict, tolerance: float) -> list[str]:

@@ -166,8 +166,7 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     pos_n = (pos - lo) / (hi - lo)
     plan = dict(cfg=cfg.to_json(), lo=lo, hi=hi, lr=lr, batch=batch, seed=seed, ema=ema,
                 warmup_steps=warmup_steps, budget=minutes * 60.0, augment_from=augment_from,
-                chroma=chroma,
-                modality=modality, out=out, folders=folders, val=val, tr=tr,
+                chroma=chroma, modality=modality, out=out, folders=folders, val=val, tr=tr,
                 threads=max(1, threads // workers))
     data = (imgs, pos_n, quat, v_imgs, v_pos, v_quat)
     stale = os.path.join(out, "best.pth")
@@ -366,9 +365,8 @@ def _fit(rank: int, world: int, plan: dict, data: tuple, model, loss_fn, log):
             if cfg.points:
                 x = imgs[idx]
             else:
-                x = normalise(augment(imgs[idx].float() / 255.0, aug_gen, strength,
-                                          plan.get("chroma", False)), cfg.mean,
-                              cfg.std)
+                x = augment(imgs[idx].float() / 255.0, aug_gen, strength, plan["chroma"])
+                x = normalise(x, cfg.mean, cfg.std)
             loss, lp, lq = objective(x, pos_n[idx], quat[idx])
             opt.zero_grad()
             loss.backward()

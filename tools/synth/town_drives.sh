@@ -22,7 +22,8 @@
 #   val_route13_dusk     a third: route seed 13, dusk light
 #   val_route14_haze ... val_route19_day  six more (route seeds 14-19, one light
 #       each): the validity gate's wrong poses are rare events, so it is chosen
-#       on all nine validation drives (~5 200 frames)
+#       on all the validation drives (nine, ~5 200 frames; fourteen since the
+#       eleventh step)
 #   val_route{50..53}_dusk  four more dusk validation drives (route seeds 50-53)
 #   val_mount_low  route 54 by day, the camera mounted 0.2 m lower than in training
 #   test_dusk  the test drive: 600 m, route seed 7, dusk — the light and the route
@@ -30,7 +31,7 @@
 #   test_route21_noon, test_route22_dusk, test_route23_haze  unseen routes (600 m)
 #   test_mount_high  unseen route 24 by day, the camera mounted 0.25 m higher
 # Test drives are looked at once per shipped model; choices use the val_ drives
-# (the confidence is calibrated on val_haze, the validity gate chosen on the nine).
+# (the confidence is calibrated on val_haze, the filter's keys chosen on all fourteen).
 # Deterministic; ~40 minutes on two cores, ~2 GB.
 #   tools/synth/town_drives.sh OUT [path/to/aprt_synth] [--only NAME]
 script=town_drives
