@@ -144,6 +144,20 @@ def cmd_quantize(a):
 def cmd_train(a):
     from .export import export_onnx
     from .train import train
+    from .train_resume import resume
+
+    if a.resume:
+        given = [f"--{k.replace('_', '-')}" for k in ("data", "out", "init", "config_json")
+                 if getattr(a, k)]
+        if given:
+            print(f"train: --resume continues the run as it was: {', '.join(given)} not taken "
+                  "(its drives, folder and weights are the run's own)", file=sys.stderr)
+            sys.exit(2)
+    elif not a.data or not a.out:
+        print("train: --data and --out are required (or --resume OUT)", file=sys.stderr)
+        sys.exit(2)
+    if a.minutes is None and not a.resume:
+        a.minutes = 90.0
 
     from .model.apr_transformer import AprConfig
 
@@ -166,13 +180,17 @@ def cmd_train(a):
             print(f"train: {a.config_json}: {e}", file=sys.stderr)
             sys.exit(2)
     try:
-        model, cfg = train(a.data, a.out, size=a.size, minutes=a.minutes, batch=a.batch, lr=a.lr,
-                           seed=a.seed, threads=a.threads, hidden=a.hidden, layers=a.layers,
-                           modality=a.modality, config=preset, inputs=a.inputs,
-                           inputs_every=a.inputs_every, val=a.val, augment_from=a.augment_from,
-                           init=a.init, workers=a.workers, uncertainty=a.uncertainty,
-                           ema=a.ema, resize=resize, bev_span_m=a.bev_span,
-                           chroma=a.chroma)
+        if a.resume:  # the run's own drives, folder and validation drive from here on
+            model, cfg, run = resume(a.resume, a.minutes)
+            a.data, a.out, a.val = run["data"], run["out"], run["val"]
+        else:
+            model, cfg = train(a.data, a.out, size=a.size, minutes=a.minutes, batch=a.batch,
+                               lr=a.lr, seed=a.seed, threads=a.threads, hidden=a.hidden,
+                               layers=a.layers, modality=a.modality, config=preset,
+                               inputs=a.inputs, inputs_every=a.inputs_every, val=a.val,
+                               augment_from=a.augment_from, init=a.init, workers=a.workers,
+                               uncertainty=a.uncertainty, ema=a.ema, resize=resize,
+                               bev_span_m=a.bev_span, chroma=a.chroma)
     except (OSError, ValueError) as e:
         print(f"train: {e}", file=sys.stderr)
         sys.exit(2)
@@ -422,7 +440,7 @@ def main(argv=None):
     en.set_defaults(fn=cmd_ensemble)
 
     t = sub.add_parser("train", help="train the reference model on a DeepLoc-layout sequence (CPU)")
-    t.add_argument("--data", required=True, nargs="+",
+    t.add_argument("--data", nargs="+",
                    help="folder(s) with poses.txt and the images; several drives train together")
     t.add_argument("--val", help="a separate drive for the validation error (default: a "
                                  "contiguous tenth of the first --data held out)")
@@ -439,11 +457,17 @@ def main(argv=None):
     t.add_argument("--chroma", action="store_true",
                    help="the colour augmentation also turns hue (+-25 deg) and scales "
                         "saturation (0.2-1.4, a tenth of the frames grey)")
-    t.add_argument("--out", required=True)
+    t.add_argument("--out")
+    t.add_argument("--resume", metavar="OUT",
+                   help="continue the run in folder OUT where it stopped (`touch OUT/STOP` "
+                        "stops a run; a killed one goes on from its last checkpoint, saved "
+                        "every 10 minutes): its drives, arguments, optimiser and schedule; "
+                        "--minutes sets a new total budget")
     t.add_argument("--size", type=int, default=None,
                    help="image side / BEV grid (default 128), or points sampled (default 4096); "
                         "with --init: an image model trained at a new input side")
-    t.add_argument("--minutes", type=float, default=90.0, help="wall-clock training budget")
+    t.add_argument("--minutes", type=float, default=None,
+                   help="wall-clock training budget (default 90; with --resume: the run's own)")
     t.add_argument("--batch", type=int, default=16)
     t.add_argument("--lr", type=float, default=1e-4)
     t.add_argument("--seed", type=int, default=1)

@@ -28,6 +28,7 @@ from .model.apr_transformer import AprConfig, AprTransformer
 from .preprocess import normalise
 from .train_data import _load, augment, network_input, split_holdout
 from .train_loss import PoseLoss
+from .train_resume import SAVE_EVERY_S, STOP_FILE, record
 
 
 @torch.no_grad()
@@ -51,7 +52,8 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
           inputs: str | None = None, inputs_every: int = 1, val: str | None = None,
           augment_from: float = 0.3, init: str | None = None, workers: int = 1,
           uncertainty: bool = False, ema: float = 0.0, resize: int | None = None,
-          bev_span_m: float = 32.0, chroma: bool = False, log=print):
+          bev_span_m: float = 32.0, chroma: bool = False, log=print,
+          resume: tuple | None = None):
     """data: one sequence folder or a list of them (several drives, e.g. under
     different light), trained on together. val: a separate drive whose errors
     are reported each epoch and recorded as the model's `val_error`; without
@@ -70,6 +72,8 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     of the initial model's (e.g. 64 -> 96): every convolution and the
     transformer carry over unchanged; the learned position tables are
     stretched to the larger feature maps (stretch_position_tables).
+    resume: (checkpoint, record) from train_resume.load: continue that run
+    where it stopped (train_resume.resume builds the call).
     ema: keep an exponential moving average of the weights with this decay per
     step (e.g. 0.999) and evaluate, save and export it; 0: the weights as trained.
     workers: data-parallel processes sharing `threads` (the batch is split
@@ -92,7 +96,14 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     os.makedirs(out, exist_ok=True)
     t0 = time.time()
     checkpoint = None
-    if init is not None:
+    if resume is not None:
+        if init is not None or config is not None:
+            raise ValueError("a resumed run keeps its own weights and configuration: no --init "
+                             "or --config-json with --resume")
+        checkpoint = resume[0]
+        config = AprConfig.from_json(json.dumps(checkpoint["config"]))
+        file_size = config.image_size
+    elif init is not None:
         if config is not None:
             raise ValueError("give either a configuration or a checkpoint to start from, not both")
         checkpoint = _load_init(init, log)
@@ -135,6 +146,10 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     else:
         tr, va = split_holdout(len(imgs))
         v_imgs, v_pos, v_quat = imgs[va], pos[va], quat[va]
+    if resume is not None and len(tr) != resume[1]["frames"]:
+        raise ValueError(f"the run trained on {resume[1]['frames']} frames of {', '.join(folders)}"
+                         f", which now hold {len(tr)}: its drives changed, so it cannot be resumed "
+                         "(--init starts a new schedule from its weights)")
     if checkpoint is not None:  # the head regresses within the bounds it was trained with
         lo, hi = torch.tensor(cfg.pose_min), torch.tensor(cfg.pose_max)
     else:
@@ -152,6 +167,8 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
     loss_fn = PoseLoss()
     if checkpoint is not None:
         state = checkpoint["model_state_dict"]
+        if resume is not None:  # the weights as trained; their average goes to _fit
+            state = checkpoint.get("train_state_dict", state)
         if "bn_frames" in checkpoint:  # a model file: its BatchNorm re-estimated on these frames
             state = _model_file_state(checkpoint, imgs[tr], cfg, file_size, log)
         if cfg.image_size != file_size:
@@ -162,15 +179,24 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
             raise ValueError(f"{init}: weights do not fit the network (missing {missing[:3]}, "
                              f"unexpected {unexpected[:3]})")
         loss_fn = PoseLoss(checkpoint.get("s_x", -3.0), checkpoint.get("s_q", -3.0))
-        log(f"train: continuing from {init}" + (" (new confidence heads)" if missing else ""))
+        if resume is None:
+            log(f"train: continuing from {init}" + (" (new confidence heads)" if missing else ""))
     pos_n = (pos - lo) / (hi - lo)
     plan = dict(cfg=cfg.to_json(), lo=lo, hi=hi, lr=lr, batch=batch, seed=seed, ema=ema,
                 warmup_steps=warmup_steps, budget=minutes * 60.0, augment_from=augment_from,
                 chroma=chroma, modality=modality, out=out, folders=folders, val=val, tr=tr,
-                threads=max(1, threads // workers))
+                threads=max(1, threads // workers),
+                # What train_resume needs to call train() again for this run.
+                args=dict(data=folders, batch=batch, lr=lr, seed=seed, threads=threads,
+                          warmup_steps=warmup_steps, modality=modality, inputs=inputs,
+                          inputs_every=inputs_every, val=val, augment_from=augment_from,
+                          workers=workers, uncertainty=uncertainty, ema=ema,
+                          bev_span_m=bev_span_m, chroma=chroma))
+    if resume is not None:
+        plan["resume"] = dict(resume[1], averaged=checkpoint["model_state_dict"])
     data = (imgs, pos_n, quat, v_imgs, v_pos, v_quat)
     stale = os.path.join(out, "best.pth")
-    if os.path.exists(stale):  # an earlier run's into the same folder
+    if resume is None and os.path.exists(stale):  # an earlier run's into the same folder
         os.remove(stale)
     if workers == 1:
         _fit(0, 1, plan, data, model, loss_fn, log)
@@ -284,8 +310,11 @@ def _fit_in_workers(workers: int, plan: dict, data: tuple, model, loss_fn):
     with tempfile.TemporaryDirectory(dir=plan["out"], prefix=".workers-") as tmp:
         for k, t in enumerate(data):
             np.save(os.path.join(tmp, f"{k}.npy"), t.numpy())
-        torch.save({"model": model.state_dict(), "loss": loss_fn.state_dict()},
-                   os.path.join(tmp, "init.pth"))
+        # The resume state (the optimiser's moments: twice the weights) goes
+        # by file like the weights, not through the spawn's pickled arguments.
+        plan = dict(plan)
+        torch.save({"model": model.state_dict(), "loss": loss_fn.state_dict(),
+                    "resume": plan.pop("resume", None)}, os.path.join(tmp, "init.pth"))
         mp.spawn(_worker, args=(workers, plan, tmp), nprocs=workers, join=True)
 
 
@@ -301,6 +330,8 @@ def _worker(rank: int, world: int, plan: dict, tmp: str):
     model, loss_fn = AprTransformer(AprConfig.from_json(plan["cfg"])), PoseLoss()
     model.load_state_dict(init["model"])
     loss_fn.load_state_dict(init["loss"])
+    if init["resume"] is not None:
+        plan = dict(plan, resume=init["resume"])
     try:
         _fit(rank, world, plan, data, model, loss_fn, lambda line: print(line, flush=True))
     finally:
@@ -324,30 +355,59 @@ def _fit(rank: int, world: int, plan: dict, data: tuple, model, loss_fn, log):
         # checkpoint keys) but never runs them: their parameters get no gradient.
         objective = nn.parallel.DistributedDataParallel(objective, find_unused_parameters=True)
     opt = torch.optim.AdamW(objective.parameters(), lr=lr, weight_decay=1e-4)
+    resumed = plan.get("resume")  # a stopped run's state (train_resume)
+    if resumed is not None:
+        opt.load_state_dict(resumed["optimizer"])
     averaged = None
     if plan.get("ema") and rank == 0:  # every worker holds the same weights: one average
         import copy
 
         averaged = copy.deepcopy(model)
         averaged.eval()
+        if resumed is not None:
+            averaged.load_state_dict(resumed["averaged"])
     perm_gen = torch.Generator().manual_seed(plan["seed"])  # the same order in every worker
     aug_gen = torch.Generator().manual_seed(plan["seed"] + 1 + rank)
     start = time.time()
     step, epoch = 0, 0
     log_rows = []
-    clock = torch.zeros(1, dtype=torch.float64)
-    done = False
+    pending = None  # a resumed epoch's frame order and its first batch not yet trained
+    if resumed is not None:
+        perm_gen.set_state(resumed["perm_gen"])
+        aug_gen.manual_seed(plan["seed"] + 1 + rank + 7919 * resumed["step"])
+        start -= resumed["elapsed_s"]
+        step, epoch, log_rows = resumed["step"], resumed["epoch"], list(resumed["log_rows"])
+        if resumed["perm"] is not None:
+            pending = (resumed["perm"], resumed["offset"])
+    stop_file = os.path.join(out, STOP_FILE)
+    saved_at = time.time()
+
+    def resume_record(perm, offset):
+        return record(plan, opt, perm_gen, step, epoch, time.time() - start, perm, offset,
+                      log_rows)
+
+    clock = torch.zeros(2, dtype=torch.float64)  # rank 0's time and stop, for every worker
+    done = stopped = False
     while not done:
-        epoch += 1
-        perm = torch.from_numpy(tr[torch.randperm(len(tr), generator=perm_gen).numpy()])
-        for b in range(0, len(perm) - batch + 1, batch):
+        if pending is not None:
+            (perm, first), pending = pending, None
+        else:
+            epoch += 1
+            perm = torch.from_numpy(tr[torch.randperm(len(tr), generator=perm_gen).numpy()])
+            first = 0
+        unfinished = None  # where this epoch stopped, if it did
+        for b in range(first, len(perm) - batch + 1, batch):
             clock[0] = (time.time() - start) / budget
+            clock[1] = float(rank == 0 and os.path.exists(stop_file))  # asked to stop
             if world > 1:
                 dist.broadcast(clock, 0)
             frac = float(clock[0])
-            if frac >= 1.0:
-                done = True
+            if frac >= 1.0 or clock[1] > 0:
+                done, stopped, unfinished = True, bool(clock[1] > 0), b
                 break
+            if rank == 0 and time.time() - saved_at > SAVE_EVERY_S:
+                _save(out, model, averaged, loss_fn, resume_record(perm, b))
+                saved_at = time.time()
             # Linear warm-up (a from-scratch transformer with post-norm diverges at
             # a high rate otherwise), constant, then cosine decay over the last 40 %.
             scale = min(1.0, (step + 1) / plan["warmup_steps"])
@@ -384,23 +444,27 @@ def _fit(rank: int, world: int, plan: dict, data: tuple, model, loss_fn, log):
             pe, oe = evaluate(shipped, v_imgs, v_pos, v_quat, lo, hi, mean=cfg.mean, std=cfg.std)
             row = dict(epoch=epoch, step=step, minutes=(time.time() - start) / 60,
                        val_pos_median=float(np.median(pe)), val_rot_median=float(np.median(oe)))
+            if unfinished is not None:  # the validation point of a stopped or timed-out epoch
+                row["partial"] = True
             log_rows.append(row)
             log(f"train: epoch {epoch} done: validation median {row['val_pos_median']:.2f} m, "
                 f"{row['val_rot_median']:.2f} deg")
             row["val_pos_p90"] = float(np.percentile(pe, 90))
             row["val_share_over_10m"] = float(np.mean(pe > 10.0))
-            saved = {"model_state_dict": shipped.state_dict(), "config": json.loads(cfg.to_json()),
-                     "s_x": loss_fn.s_x.item(), "s_q": loss_fn.s_q.item()}
-            if averaged is not None:  # to continue training from the weights as trained
-                saved["train_state_dict"] = model.state_dict()
-            torch.save(saved, os.path.join(out, "checkpoint.pth.tmp"))
-            os.replace(os.path.join(out, "checkpoint.pth.tmp"), os.path.join(out, "checkpoint.pth"))
+            saved = _save(out, model, averaged, loss_fn,
+                          resume_record(None if unfinished is None else perm, unfinished or 0))
+            saved_at = time.time()
+            if stopped:
+                os.remove(stop_file)
+                log(f"train: stopped by {stop_file} at {row['minutes']:.1f} of "
+                    f"{budget / 60:.1f} minutes; `train --resume {out}` continues")
             # The best validation point so far is what the run exports: the
             # last one can be worse (the average still moving as the rate decays).
             if row["val_pos_median"] <= min(r["val_pos_median"] for r in log_rows):
-                saved["epoch"] = epoch
-                saved["val_pos_median"] = row["val_pos_median"]
-                torch.save(saved, os.path.join(out, "best.pth.tmp"))
+                best = {k: v for k, v in saved.items() if k != "resume"}  # weights only
+                best["epoch"] = epoch
+                best["val_pos_median"] = row["val_pos_median"]
+                torch.save(best, os.path.join(out, "best.pth.tmp"))
                 os.replace(os.path.join(out, "best.pth.tmp"), os.path.join(out, "best.pth"))
             # Written every epoch: an interrupted run is still exportable
             # (python3 -m aprt_tools export --config-json OUT/model.json --weights
@@ -414,6 +478,19 @@ def _fit(rank: int, world: int, plan: dict, data: tuple, model, loss_fn, log):
         dist.all_gather(gathered, sums)
         if any(not torch.equal(g, gathered[0]) for g in gathered):
             raise RuntimeError("train: the workers' weights diverged")
+
+
+def _save(out: str, model, averaged, loss_fn, resume: dict) -> dict:
+    """checkpoint.pth, replaced whole: the weights shipped (the average with
+    --ema), the weights as trained, the loss weights and the resume record."""
+    shipped = averaged if averaged is not None else model
+    saved = {"model_state_dict": shipped.state_dict(), "config": json.loads(model.cfg.to_json()),
+             "s_x": loss_fn.s_x.item(), "s_q": loss_fn.s_q.item(), "resume": resume}
+    if averaged is not None:  # to continue training from the weights as trained
+        saved["train_state_dict"] = model.state_dict()
+    torch.save(saved, os.path.join(out, "checkpoint.pth.tmp"))
+    os.replace(os.path.join(out, "checkpoint.pth.tmp"), os.path.join(out, "checkpoint.pth"))
+    return saved
 
 
 @torch.no_grad()
