@@ -36,10 +36,11 @@ install(FILES config/default.yaml config/autoware.yaml config/aprt_pose.dbc
               config/vehicle_odometry_example.dbc config/aprt.service
         DESTINATION ${APRT_INSTALL_DATADIR}/config COMPONENT runtime)
 install(DIRECTORY config/idl DESTINATION ${APRT_INSTALL_DATADIR}/config COMPONENT runtime)
-# (A candidate model not yet shipped, model_bin/*_candidate.aprt, stays out.)
+# (A candidate model not yet shipped, model_bin/*_candidate.aprt, and a
+# training run's weights kept to continue it elsewhere, *_partial.aprt, stay out.)
 install(DIRECTORY model_bin/ DESTINATION ${APRT_INSTALL_DATADIR}/model_bin COMPONENT runtime
         FILES_MATCHING PATTERN "*.aprt" PATTERN "*.json" PATTERN "*.md"
-        PATTERN "*_candidate.aprt" EXCLUDE)
+        PATTERN "*_candidate.aprt" EXCLUDE PATTERN "*_partial.aprt" EXCLUDE)
 install(DIRECTORY data/demo_drive DESTINATION ${APRT_INSTALL_DATADIR}/data COMPONENT runtime)
 install(FILES config/aprt.yaml DESTINATION ${CMAKE_INSTALL_FULL_SYSCONFDIR}/aprt
         COMPONENT runtime)
