@@ -187,9 +187,12 @@ def train(data, out: str, size: int = 128, minutes: float = 90.0, batch: int = 1
                 chroma=chroma, modality=modality, out=out, folders=folders, val=val, tr=tr,
                 threads=max(1, threads // workers),
                 # What train_resume needs to call train() again for this run.
-                args=dict(data=folders, batch=batch, lr=lr, seed=seed, threads=threads,
-                          warmup_steps=warmup_steps, modality=modality, inputs=inputs,
-                          inputs_every=inputs_every, val=val, augment_from=augment_from,
+                # Paths absolute: a run is resumed from any working directory.
+                args=dict(data=[os.path.abspath(f) for f in folders], batch=batch, lr=lr, seed=seed, threads=threads,
+                          warmup_steps=warmup_steps, modality=modality,
+                          inputs=inputs and os.path.abspath(inputs),
+                          inputs_every=inputs_every, val=val and os.path.abspath(val),
+                          augment_from=augment_from,
                           workers=workers, uncertainty=uncertainty, ema=ema,
                           bev_span_m=bev_span_m, chroma=chroma))
     if resume is not None:

@@ -24,6 +24,7 @@ optimiser, the average and the schedule are.
 from __future__ import annotations
 
 import os
+import pickle
 
 import torch
 
@@ -51,7 +52,10 @@ def load(path: str) -> tuple[dict, dict]:
     if not os.path.exists(ckpt):
         raise ValueError(f"{path}: no checkpoint.pth to resume (the run saves its first one "
                          f"{SAVE_EVERY_S / 60:.0f} minutes in, or at its first epoch's end)")
-    checkpoint = torch.load(ckpt, map_location="cpu")
+    try:
+        checkpoint = torch.load(ckpt, map_location="cpu")
+    except (RuntimeError, EOFError, pickle.UnpicklingError) as e:
+        raise ValueError(f"{ckpt}: not readable as a checkpoint (file truncated?): {e}") from e
     rec = checkpoint.get("resume") if isinstance(checkpoint, dict) else None
     if not isinstance(rec, dict) or rec.get("format") != FORMAT:
         raise ValueError(f"{ckpt}: written before runs could be resumed (no resume record): "
@@ -67,7 +71,13 @@ def train_arguments(rec: dict, out: str, minutes: float | None) -> dict:
     if total <= spent:
         raise ValueError(f"the run has spent {spent:.1f} of its {total:.1f} minutes: give "
                          f"--minutes more than {spent:.1f} (the new total budget) to go on")
-    return dict(rec["args"], out=out, minutes=total)
+    args = rec["args"]
+    for drive in [*args["data"], *([args["val"]] if args["val"] else [])]:
+        if not os.path.isdir(drive):
+            raise ValueError(f"the run's drive {drive} is not here: resume on the machine that "
+                             "has its drives (or render them again), or start a new schedule "
+                             "from its weights with --init")
+    return dict(args, out=out, minutes=total)
 
 
 def resume(path: str, minutes: float | None = None, log=print):
