@@ -144,8 +144,9 @@ int cmd_info(int argc, char** argv) {
     std::printf("validation   no measured error in the file\n");
   }
   if (m.ensemble_members > 0) {
-    std::printf("ensemble     %u networks averaged in one graph (aprt_tools ensemble)\n",
-                unsigned(m.ensemble_members));
+    std::printf("ensemble     %u networks (aprt_tools ensemble)%s\n", unsigned(m.ensemble_members),
+                m.member_outputs > 0 ? ", merged at run time, their spread in the confidence"
+                                     : ", averaged in the graph");
   }
   if (m.has_uncertainty) {
     std::printf(

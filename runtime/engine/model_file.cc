@@ -5,6 +5,7 @@
 
 #include "runtime/base/check.h"
 #include "runtime/base/crc32.h"
+#include "runtime/engine/ensemble_merge.h"
 #include "runtime/engine/model_bytes.h"
 
 namespace aprt {
@@ -318,13 +319,19 @@ class ModelFileParser {
     APRT_ENSURE(in.dims[0] == 1, Errc::kUnsupported, "model_bin: batch size %u (only 1)",
                 in.dims[0]);
     const TensorEntry& out = file_.tensors_[file_.output_];
-    APRT_ENSURE(out.dtype == DType::kF32 && (out.numel == 7 || out.numel == 13), Errc::kBadGraph,
-                "model_bin: output '%s' must be 7 f32 values (x y z qw qx qy qz), or 13 with "
-                "the confidence outputs, has %llu %s",
-                out.name, static_cast<unsigned long long>(out.numel),
+    const uint32_t members = file_.meta_.ensemble_members;
+    const bool with_members = members >= 2 && members <= uint32_t(kMaxEnsembleMembers) &&
+                              out.numel == uint64_t(kNetworkOutputs) * members;
+    APRT_ENSURE(out.dtype == DType::kF32 && (out.numel == 7 || out.numel == 13 || with_members),
+                Errc::kBadGraph,
+                "model_bin: output '%s' must be 7 f32 values (x y z qw qx qy qz), 13 with "
+                "the confidence outputs, or 13 per member of an ensemble (META 'ensemble' "
+                "= %u), has %llu %s",
+                out.name, unsigned(members), static_cast<unsigned long long>(out.numel),
                 format::dtype_name(out.dtype));
-    APRT_ENSURE((out.numel == 13) == file_.meta_.has_uncertainty, Errc::kBadMetadata, "%s",
-                out.numel == 13
+    file_.meta_.member_outputs = with_members ? members : 0;
+    APRT_ENSURE((out.numel >= 13) == file_.meta_.has_uncertainty, Errc::kBadMetadata, "%s",
+                out.numel >= 13
                     ? "model_bin: the model has confidence outputs but no 'uncertainty' "
                       "calibration (python3 -m aprt_tools confidence MODEL --val DRIVE)"
                     : "model_bin: metadata 'uncertainty' without the confidence outputs "

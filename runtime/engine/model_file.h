@@ -44,8 +44,13 @@ struct ModelMeta {
   bool has_uncertainty = false;
   float uncertainty_scale[2] = {0.0f, 0.0f};
   // 1.4: how many networks the graph averages (aprt_tools ensemble); 0 for
-  // one network. Informational: the graph itself does the averaging.
+  // one network. The graph itself does the averaging.
   uint32_t ensemble_members = 0;
+  // 1.5: the output is each member's 13 outputs side by side (under this
+  // file's bounds), merged by decode_pose (ensemble_merge.h):
+  // ensemble_members when it is, else 0 (a 1.4 file whose graph averages;
+  // set by the loader from the output's size).
+  uint32_t member_outputs = 0;
   const char* config_json = nullptr;  // points into the file; not NUL-terminated
   size_t config_json_bytes = 0;
   // How the file was quantised (method, calibration set, per-op policy) as

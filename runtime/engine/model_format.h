@@ -10,8 +10,9 @@ namespace aprt::format {
 
 inline constexpr char kMagic[8] = {'A', 'P', 'R', 'T', 'M', 'D', 'L', '\0'};
 inline constexpr uint16_t kVersionMajor = 1;
-// 1.1: int8 weights; 1.2: point ops; 1.3: confidence; 1.4: ensembles (FORMAT.md)
-inline constexpr uint16_t kVersionMinor = 4;
+// 1.1: int8 weights; 1.2: point ops; 1.3: confidence; 1.4: ensembles; 1.5: an
+// ensemble's member positions in its output (FORMAT.md)
+inline constexpr uint16_t kVersionMinor = 5;
 inline constexpr uint32_t kHeaderBytes = 64;
 inline constexpr uint32_t kSectionEntryBytes = 32;
 inline constexpr uint32_t kTensorEntryBytes = 64;

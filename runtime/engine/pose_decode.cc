@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "runtime/engine/ensemble_merge.h"
+
 namespace aprt {
 
 namespace {
@@ -16,19 +18,41 @@ double laplace_sigma(float s) {
 
 }  // namespace
 
-PoseEstimate decode_pose(const float* raw, const ModelMeta& meta, float bounds_margin) noexcept {
+PoseEstimate decode_pose(const float* raw_outputs, const ModelMeta& meta,
+                         float bounds_margin) noexcept {
   PoseEstimate p;
+  // An ensemble's members merged first (FORMAT.md 1.5): one network's
+  // outputs, and how far the members are apart.
+  MergedOutputs merged;
+  const float* raw = raw_outputs;
+  if (meta.member_outputs > 0) {
+    merged = merge_members(raw_outputs, int(meta.member_outputs));
+    raw = merged.raw;
+  }
   if (meta.has_uncertainty) {
     bool finite = true;
     for (int i = 7; i < 13; ++i) finite = finite && std::isfinite(raw[i]);
+    for (int i = 0; i < 3; ++i) {
+      finite =
+          finite && std::isfinite(merged.position_sd[i]) && std::isfinite(merged.rotation_sd[i]);
+    }
     if (!finite) {
       p.flags |= kPoseNoConfidence;
     } else {
       p.has_sigma = true;
       for (int i = 0; i < 3; ++i) {
-        p.sigma_position_m[i] = meta.uncertainty_scale[0] * laplace_sigma(raw[7 + i]) *
-                                double(meta.pose_max[i] - meta.pose_min[i]);
-        p.sigma_rotation_rad[i] = meta.uncertainty_scale[1] * laplace_sigma(raw[10 + i]);
+        // The members' spread joins the network's own in quadrature, before
+        // the calibration scale (a variance of a mixture: Lakshminarayanan
+        // et al. 2017); zero for one network.
+        const double extent = double(meta.pose_max[i] - meta.pose_min[i]);
+        const double own = laplace_sigma(raw[7 + i]);
+        const double spread = merged.position_sd[i];
+        p.sigma_position_m[i] =
+            meta.uncertainty_scale[0] * std::sqrt(own * own + spread * spread) * extent;
+        const double own_r = laplace_sigma(raw[10 + i]);
+        const double spread_r = merged.rotation_sd[i];
+        p.sigma_rotation_rad[i] =
+            meta.uncertainty_scale[1] * std::sqrt(own_r * own_r + spread_r * spread_r);
       }
     }
   }

@@ -25,10 +25,10 @@ struct PoseEstimate {
   float raw_quat_norm = 0.0f;
   uint32_t flags = 0;
   // The model's own confidence for this frame (files with 'uncertainty',
-  // FORMAT.md 1.3): one standard deviation of the position error per map
-  // axis (m) and of the rotation error about the camera's x, y, z axes (rad;
-  // z is yaw). Without it, false and zeros (the outputs use the validation
-  // error instead).
+  // FORMAT.md 1.3; an ensemble's members' spread included, 1.5): one
+  // standard deviation of the position error per map axis (m) and of the
+  // rotation error about the camera's x, y, z axes (rad; z is yaw). Without
+  // it, false and zeros (the outputs use the validation error instead).
   bool has_sigma = false;
   double sigma_position_m[3] = {};
   double sigma_rotation_rad[3] = {};
@@ -36,9 +36,12 @@ struct PoseEstimate {
   bool valid() const { return flags == 0; }
 };
 
-// raw: the engine's output, 7 values, or 13 when meta.has_uncertainty (the
-// loader guarantees it). `bounds_margin` widens the bounds by that fraction
-// of their extent on each side.
+// raw: the engine's output, 7 values, or 13 when meta.has_uncertainty, or
+// 13 per member of an ensemble when meta.member_outputs (the loader
+// guarantees it): the members are merged first (ensemble_merge.h), and their
+// spread joins the confidence -- a frame whose members disagree, most often
+// one of them on another street, says so itself. `bounds_margin` widens the
+// bounds by that fraction of their extent on each side.
 // @rt: constant time, no allocation.
 PoseEstimate decode_pose(const float* raw, const ModelMeta& meta,
                          float bounds_margin = 0.1f) noexcept;

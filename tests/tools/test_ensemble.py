@@ -1,5 +1,6 @@
-"""An ensemble file (aprt_tools/ensemble.py) computes the mean of its members'
-outputs (engine_ir's statement of the engine; the C++ engine against PyTorch
+"""An ensemble file (aprt_tools/ensemble.py) gives its members' outputs side by
+side, merged as the runtime merges them (ensemble_merge.py, mirrored by
+tests/unit/ensemble_merge_test.cc on the same numbers) (engine_ir's statement of the engine; the C++ engine against PyTorch
 is golden.tiny_ensemble), refuses members that are not one model, and is not
 read back into one network."""
 
@@ -57,24 +58,100 @@ class Ensemble(unittest.TestCase):
         self.assertEqual(reader.read(blob)[1]["ensemble"], 3)
         shape = reader.read(members[0])[1]["input_shape"]
         x = np.random.default_rng(2).standard_normal(shape).astype(np.float32)
-        want = np.mean([engine_output(m, x) for m in members], axis=0)
+        each = [engine_output(m, x) for m in members]
         got = engine_output(blob, x)
-        self.assertEqual(got.shape, (13,))
-        np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
+        self.assertEqual(got.shape, (13 * 3,))  # FORMAT.md 1.5: the members side by side
+        np.testing.assert_allclose(got, np.concatenate(each), rtol=1e-5, atol=1e-6)
         # The members differ, or the test would prove nothing.
-        self.assertGreater(np.abs(engine_output(members[0], x) - want).max(), 1e-3)
+        self.assertGreater(np.abs(each[0] - each[1]).max(), 1e-3)
 
     def test_refuses_members_that_are_not_one_model(self):
         from aprt_tools.ensemble import EnsembleError, build
 
         a = converted(tiny(), 3)
-        with self.assertRaisesRegex(EnsembleError, "pose_max differs"):
-            build([a, converted(tiny(pose_max=(90.0, 50.0, 3.0)), 4)], ["a", "b"])
+        other = tiny()
+        other.hidden_dim *= 2
+        with self.assertRaisesRegex(EnsembleError, "config_json differs"):
+            build([a, converted(other, 4)], ["a", "b"])
         with self.assertRaisesRegex(EnsembleError, "confidence outputs"):
             build([converted(tiny(uncertainty=False), 3), converted(tiny(uncertainty=False), 4)],
                   ["a", "b"])
         with self.assertRaisesRegex(EnsembleError, "2 to 8"):
             build([a], ["a"])
+
+    def test_members_with_their_own_bounds_are_averaged_in_metres(self):
+        """Networks trained on different drives normalise positions by different
+        bounds: the ensemble's are their union, and its outputs, read with them,
+        are the mean of the members' positions and the geometric mean of their
+        sigmas, in metres; a member extracted has its own bounds again."""
+        from aprt_tools.ensemble import build, extract
+        from aprt_tools.model_bin import reader
+        from aprt_tools.model_bin.writer import serialise
+
+        a = converted(tiny(), 3)
+        b = converted(tiny(pose_max=(120.0, 40.0, 2.5)), 4)
+        cfg_c = tiny(pose_max=(90.0, 60.0, 3.5))
+        cfg_c.pose_min = (-10.0, 5.0, 0.5)
+        c = converted(cfg_c, 5)
+        graph, meta = build([a, b, c], ["a", "b", "c"])
+        meta["uncertainty"] = [1.0, 1.0]
+        blob = serialise(graph, meta)
+        got_meta = reader.read(blob)[1]
+        np.testing.assert_allclose(got_meta["pose_min"], [-10.0, 0.0, 0.0])
+        np.testing.assert_allclose(got_meta["pose_max"], [120.0, 60.0, 3.5])
+        self.assertEqual(sum(op.name.endswith(":rebound") for op in reader.read(blob)[0].ops), 3)
+        x = np.random.default_rng(5).standard_normal(got_meta["input_shape"]).astype(np.float32)
+
+        def metres(blob_):
+            from aprt_tools.ensemble_merge import merge
+
+            m = reader.read(blob_)[1]
+            lo, hi = np.asarray(m["pose_min"]), np.asarray(m["pose_max"])
+            y = merge(engine_output(blob_, x).astype(np.float64)[None])[0][0]
+            return y[:3] * (hi - lo) + lo, np.exp(y[7:10]) * (hi - lo), y[10:13]
+
+        members = [metres(m) for m in (a, b, c)]
+        pos, sigma, rot = metres(blob)
+        np.testing.assert_allclose(pos, np.mean([m[0] for m in members], axis=0), rtol=1e-5)
+        np.testing.assert_allclose(sigma, np.exp(np.mean([np.log(m[1]) for m in members], axis=0)),
+                                   rtol=1e-4)
+        np.testing.assert_allclose(rot, np.mean([m[2] for m in members], axis=0), atol=1e-5)
+        third = extract(blob, 2)
+        np.testing.assert_allclose(reader.read(third)[1]["pose_min"], cfg_c.pose_min, atol=1e-4)
+        np.testing.assert_allclose(reader.read(third)[1]["pose_max"], cfg_c.pose_max, atol=1e-4)
+        self.assertFalse(any("rebound" in op.name for op in reader.read(third)[0].ops))
+        np.testing.assert_array_equal(engine_output(third, x), engine_output(c, x))
+
+    def test_merge_turns_quaternions_to_one_sign_and_measures_the_spread(self):
+        """The numbers of tests/unit/ensemble_merge_test.cc: the runtime and the
+        calibration merge alike."""
+        from aprt_tools.confidence import sigmas
+        from aprt_tools.ensemble_merge import merge
+
+        s = np.log(0.01)
+        a = [0.45, 0.5, 0.49, 1.0, 0.0, 0.0, 0.0, s, s, s, s, s, s]
+        # The same rotation turned 0.2 rad about z, written as -q (its sign
+        # flipped, as a network trained apart may write it), and longer.
+        b = [0.55, 0.5, 0.51, -2 * np.cos(0.1), 0.0, 0.0, -2 * np.sin(0.1), s, s, s, s, s, s]
+        merged, position_sd, rotation_sd = merge(np.array([a + b]))
+        np.testing.assert_allclose(merged[0, :3], [0.5, 0.5, 0.5], rtol=1e-6)
+        # Member b is the reference (the larger norm); a is turned to its sign.
+        np.testing.assert_allclose(merged[0, 3:7], [-(1 + 2 * np.cos(0.1)) / 2, 0, 0,
+                                                    -np.sin(0.1)], rtol=1e-6)
+        np.testing.assert_allclose(position_sd[0], [0.05, 0.0, 0.01], atol=1e-7)
+        self.assertAlmostEqual(rotation_sd[0, 0], 0.0)
+        # The merged rotation lies between the two; each is ~0.1 rad away from it.
+        self.assertGreater(rotation_sd[0, 2], 0.09)
+        self.assertLess(rotation_sd[0, 2], 0.11)
+        sp, sr = sigmas(np.array([a + b]), (-100, 50, 0), (300, 250, 10), 2.0, 0.5)
+        own = np.sqrt(2.0) * 0.01
+        self.assertAlmostEqual(sp[0, 0], 2.0 * np.hypot(own, 0.05) * 400.0, places=4)
+        self.assertAlmostEqual(sp[0, 1], 2.0 * own * 200.0, places=4)
+        self.assertAlmostEqual(sr[0, 2], 0.5 * np.hypot(own, rotation_sd[0, 2]), places=6)
+        # One network: as it is.
+        one, p0, r0 = merge(np.array([a]))
+        np.testing.assert_allclose(one[0], a)
+        self.assertEqual(float(np.abs(p0).max() + np.abs(r0).max()), 0.0)
 
     def test_refuses_an_ensemble_as_a_member_and_to_torch_refuses_it(self):
         from aprt_tools.ensemble import EnsembleError, build
@@ -148,8 +225,13 @@ class Ensemble(unittest.TestCase):
             blob, report = ensemble.calibrated(members, ["a", "b"], "val")
         finally:
             ensemble.member_outputs = saved
-        want = fit(np.mean(raws, axis=0), pos, quat, cfg.pose_min, cfg.pose_max)
+        # The members side by side, as the graph outputs them: their spread is
+        # part of the sigma the calibration scales.
+        outputs = np.concatenate(raws, axis=1)
+        want = fit(outputs, pos, quat, cfg.pose_min, cfg.pose_max)
         np.testing.assert_allclose(reader.read(blob)[1]["uncertainty"], want, rtol=1e-6)
+        self.assertNotEqual(want, fit(np.mean(raws, axis=0), pos, quat, cfg.pose_min,
+                                      cfg.pose_max))
         self.assertIn("2 members", report)
 
 

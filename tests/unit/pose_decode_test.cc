@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "runtime/engine/ensemble_merge.h"
 #include "runtime/pose/pose_flags.h"
 
 namespace aprt {
@@ -90,6 +91,43 @@ TEST(PoseDecode, ConfidenceOutputsBecomeStandardDeviations) {
   EXPECT_TRUE(q.flags & kPoseNoConfidence);
   // Without the calibration (a 7-output model) nothing past raw[6] is read.
   EXPECT_FALSE(decode_pose(raw, meta()).has_sigma);
+}
+
+// An ensemble's members side by side (FORMAT.md 1.5): merged, and their
+// spread joins the network's own sigma before the calibration scale. The
+// numbers of tests/tools/test_ensemble.py's merge test.
+TEST(PoseDecode, AnEnsemblesMembersAreMergedAndTheirSpreadJoinsTheSigma) {
+  ModelMeta m = meta();
+  m.has_uncertainty = true;
+  m.uncertainty_scale[0] = 2.0f;
+  m.uncertainty_scale[1] = 0.5f;
+  m.ensemble_members = 2;
+  m.member_outputs = 2;
+  const float s = std::log(0.01f);
+  const float c = float(std::cos(0.1)), z = float(std::sin(0.1));
+  const float raw[26] = {0.45f, 0.5f, 0.49f, 1,      0, 0, 0,      s, s, s, s, s, s,
+                         0.55f, 0.5f, 0.51f, -2 * c, 0, 0, -2 * z, s, s, s, s, s, s};
+  const PoseEstimate p = decode_pose(raw, m);
+  ASSERT_TRUE(p.has_sigma);
+  EXPECT_TRUE(p.valid());
+  EXPECT_NEAR(p.position[0], -100 + 0.5 * 400, 1e-4);
+  EXPECT_NEAR(p.position[2], 5.0, 1e-5);
+  // The quaternion turned to one sign, then w >= 0: about z by 0.1 / 3 rad.
+  const MergedOutputs merged = merge_members(raw, 2);
+  EXPECT_NEAR(p.orientation[0], std::cos(std::atan2(z, (1 + 2 * c) / 2)), 1e-6);
+  const double own = std::sqrt(2.0) * 0.01;
+  EXPECT_NEAR(p.sigma_position_m[0], 2.0 * std::hypot(own, 0.05) * 400.0, 1e-3);
+  EXPECT_NEAR(p.sigma_position_m[1], 2.0 * own * 200.0, 1e-4);
+  EXPECT_NEAR(p.sigma_position_m[2], 2.0 * std::hypot(own, 0.01) * 10.0, 1e-4);
+  EXPECT_NEAR(p.sigma_rotation_rad[0], 0.5 * own, 1e-6);
+  EXPECT_NEAR(p.sigma_rotation_rad[2], 0.5 * std::hypot(own, merged.rotation_sd[2]), 1e-6);
+  // A member's value not finite: flagged, no confidence.
+  float bad[26];
+  std::copy(raw, raw + 26, bad);
+  bad[13] = std::numeric_limits<float>::infinity();
+  const PoseEstimate q = decode_pose(bad, m);
+  EXPECT_FALSE(q.valid());
+  EXPECT_TRUE(q.flags & kPoseNonFinite);
 }
 
 }  // namespace

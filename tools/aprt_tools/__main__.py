@@ -429,9 +429,10 @@ def main(argv=None):
     cf.set_defaults(fn=cmd_confidence)
 
     en = sub.add_parser("ensemble", help="several fp32 models of one configuration as one "
-                        "model file that averages them, its confidence calibrated on --val")
+                        "model file whose members the runtime merges (their spread in the "
+                        "confidence), calibrated on --val")
     en.add_argument("models", nargs="+", help="2 to 8 fp32 model files with confidence "
-                    "outputs, one configuration and position bounds")
+                    "outputs and one configuration (their position bounds may differ)")
     en.add_argument("-o", "--output", required=True)
     en.add_argument("--val", help="the labelled validation drive to calibrate the "
                     "confidence on (as `confidence` does for one model); required to build")

@@ -24,16 +24,23 @@ import math
 import numpy as np
 import torch
 
+from .ensemble_merge import merge
+
 CHI2_2D_95 = 5.991464547107979
 Z_95 = 1.959963984540054
 
 
 def sigmas(raw: np.ndarray, pose_min, pose_max, k_pos: float = 1.0, k_rot: float = 1.0):
-    """(N, 13) network outputs -> position sigma (N, 3) m, rotation sigma (N, 3) rad."""
+    """(N, 13) network outputs -> position sigma (N, 3) m, rotation sigma (N, 3) rad.
+    An ensemble's (N, 13 n) outputs are merged first, and the members' spread
+    joins the network's own sigma in quadrature, as the runtime does
+    (pose_decode.cc)."""
+    raw, position_sd, rotation_sd = merge(raw)
     s = np.clip(raw[:, 7:13], -14.0, 6.0)
     extent = np.asarray(pose_max, np.float64) - np.asarray(pose_min, np.float64)
     b = math.sqrt(2.0) * np.exp(s)
-    return k_pos * b[:, :3] * extent, k_rot * b[:, 3:]
+    position = np.sqrt(b[:, :3] ** 2 + position_sd ** 2) * extent
+    return k_pos * position, k_rot * np.sqrt(b[:, 3:] ** 2 + rotation_sd ** 2)
 
 
 def rotation_errors(q_pred: np.ndarray, q_true: np.ndarray) -> np.ndarray:
@@ -48,12 +55,13 @@ def fit(raw: np.ndarray, pos_true: np.ndarray, quat_true: np.ndarray, pose_min, 
         coverage: float = 0.95):
     """The two calibration factors on one drive, and the coverage each gives."""
     lo, hi = np.asarray(pose_min), np.asarray(pose_max)
-    pos = raw[:, :3] * (hi - lo) + lo
+    pose = merge(raw)[0]
+    pos = pose[:, :3] * (hi - lo) + lo
     sp, sr = sigmas(raw, pose_min, pose_max)
     e = pos - pos_true
     d2 = (e[:, 0] / sp[:, 0]) ** 2 + (e[:, 1] / sp[:, 1]) ** 2
     k_pos = math.sqrt(float(np.quantile(d2, coverage)) / CHI2_2D_95)
-    yaw = np.abs(rotation_errors(raw[:, 3:7], quat_true)[:, 2])
+    yaw = np.abs(rotation_errors(pose[:, 3:7], quat_true)[:, 2])
     k_rot = float(np.quantile(yaw / sr[:, 2], coverage)) / Z_95
     return max(k_pos, 1e-3), max(k_rot, 1e-3)
 
@@ -61,11 +69,12 @@ def fit(raw: np.ndarray, pos_true: np.ndarray, quat_true: np.ndarray, pose_min, 
 def coverage(raw, pos_true, quat_true, pose_min, pose_max, k_pos, k_rot):
     """Shares of frames inside the published 95 % regions: horizontal position, yaw."""
     lo, hi = np.asarray(pose_min), np.asarray(pose_max)
-    pos = raw[:, :3] * (hi - lo) + lo
+    pose = merge(raw)[0]
+    pos = pose[:, :3] * (hi - lo) + lo
     sp, sr = sigmas(raw, pose_min, pose_max, k_pos, k_rot)
     e = pos - pos_true
     d2 = (e[:, 0] / sp[:, 0]) ** 2 + (e[:, 1] / sp[:, 1]) ** 2
-    yaw = np.abs(rotation_errors(raw[:, 3:7], quat_true)[:, 2])
+    yaw = np.abs(rotation_errors(pose[:, 3:7], quat_true)[:, 2])
     return float(np.mean(d2 <= CHI2_2D_95)), float(np.mean(yaw <= Z_95 * sr[:, 2]))
 
 

@@ -109,28 +109,41 @@ def make_golden_int8(src_dir: str, out_dir: str, method: str = "percentile",
 def make_golden_ensemble(cfg: AprConfig, out_dir: str, *, members: int = 2, seed: int = 1,
                          count: int = 3) -> dict:
     """Golden data for an ensemble file (ensemble.py): `members` varied-weight
-    networks with confidence heads, converted, laid into one graph; the
-    expected outputs are the mean of the PyTorch members' 13 outputs."""
+    networks with confidence heads, each with its own position bounds (as
+    networks trained on different drives have), converted, laid into one
+    graph; the expected outputs are the PyTorch members' 13 outputs side by
+    side, each mapped to the ensemble's bounds (ensemble.rebound)."""
     from .convert.convert import convert
-    from .ensemble import build
+    from .ensemble import build, rebound, union_bounds
     from .model_bin.writer import serialise
 
     os.makedirs(out_dir, exist_ok=True)
     cfg.uncertainty = True
-    config = json.loads(cfg.to_json())
-    models, blobs = [], []
+    models, blobs, bounds = [], [], []
     for i in range(members):
+        config = json.loads(cfg.to_json())
+        lo, hi = np.asarray(config["pose_min"]), np.asarray(config["pose_max"])
+        lo, hi = lo + 0.02 * i * (hi - lo), hi - 0.03 * i * (hi - lo)  # within member 0's
+        config["pose_min"], config["pose_max"] = lo.tolist(), hi.tolist()
         torch.manual_seed(seed + i)
         model = vary(AprTransformer(cfg), seed + i).eval()
         blob, _ = convert(export_onnx(model, 13), config=config)
         models.append(model)
         blobs.append(blob)
+        bounds.append(dict(pose_min=lo.tolist(), pose_max=hi.tolist()))
     graph, meta = build(blobs, [f"member {i}" for i in range(members)])
     meta["uncertainty"] = [1.0, 1.0]  # the raw outputs are compared; the scales are not used
     with open(os.path.join(out_dir, "model.aprt"), "wb") as f:
         f.write(serialise(graph, meta))
-    manifest = _write_cases(cfg, out_dir,
-                            lambda x: torch.stack([m(x) for m in models]).mean(dim=0), seed, count,
-                            members=members)
+    lo_e, hi_e = union_bounds(bounds)
+    maps = [rebound(np.asarray(b["pose_min"]), np.asarray(b["pose_max"]), lo_e, hi_e)
+            for b in bounds]
+    maps = [(torch.tensor(w, dtype=torch.float32), torch.tensor(b, dtype=torch.float32))
+            for w, b in maps]
+    def expected(x):
+        # The members' outputs side by side (FORMAT.md 1.5).
+        return torch.cat([m(x) @ w.T + b for m, (w, b) in zip(models, maps)], dim=1)
+
+    manifest = _write_cases(cfg, out_dir, expected, seed, count, members=members)
     return dict(report=f"{members} members, {len(graph.ops)} ops",
                 min_relative_spread=manifest["min_relative_spread"])

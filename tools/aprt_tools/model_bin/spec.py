@@ -8,7 +8,7 @@ MAGIC = b"APRTMDL\x00"
 VERSION_MAJOR = 1
 # 1.1: int8 weights, 'quantization'; 1.2: the PointNet++ ops, 'points';
 # 1.3: 'uncertainty'; 1.4: 'ensemble'
-VERSION_MINOR = 4
+VERSION_MINOR = 5
 HEADER_BYTES = 64
 SECTION_ENTRY_BYTES = 32
 TENSOR_ENTRY_BYTES = 64
