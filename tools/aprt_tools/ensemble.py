@@ -192,8 +192,8 @@ def extract(data: bytes, index: int) -> bytes:
     prefix = _prefix(index)
     concat = next(op for op in graph.ops if op.name == "ensemble/concat")
     # The file's output: the concatenation (1.5), or a mean after it (1.4).
-    mean = next((op for op in graph.ops if op.name == "ensemble/mean"), concat)
-    pose, out = concat.inputs[index], mean.outputs[0]
+    last = next((op for op in graph.ops if op.name == "ensemble/mean"), concat)
+    pose, out = concat.inputs[index], last.outputs[0]
     moved = next((op for op in graph.ops if op.name == f"{prefix}rebound"), None)
     if moved is not None:
         # The member's own bounds, from the map to the ensemble's (rebound()).

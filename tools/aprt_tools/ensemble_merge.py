@@ -19,14 +19,14 @@ OUTPUTS = 13
 
 
 def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(N, 4) unit a, b -> (N, 3) axis-angle of conj(a) * b, sign-free
-    (train_loss.rotation_error_vector)."""
-    w = np.sum(a * b, axis=1)
-    v = a[:, :1] * b[:, 1:] - b[:, :1] * a[:, 1:] - np.cross(a[:, 1:], b[:, 1:])
-    sign = np.where(w < 0, -1.0, 1.0)
-    w, v = w * sign, v * sign[:, None]
-    n = np.maximum(np.linalg.norm(v, axis=1), 1e-12)
-    return v / n[:, None] * (2.0 * np.arctan2(n, w))[:, None]
+    """(N, 4) unit a, b -> (N, 3) axis-angle of conj(a) * b, sign-free: the
+    trainer's rotation error (train_loss.rotation_error_vector), in float64."""
+    import torch
+
+    from .train_loss import rotation_error_vector
+
+    return rotation_error_vector(torch.from_numpy(np.ascontiguousarray(b)),
+                                 torch.from_numpy(np.ascontiguousarray(a))).numpy()
 
 
 def merge(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
