@@ -170,9 +170,11 @@ Config shipped_config() {
 #endif
   c.source.replay.rate_hz = 40;
   // 2 s. Faults counted in inferences or poses come early in it: a sanitizer
-  // build's inference of the shipped model (~35 ms alone, twice that beside
-  // another test) is slower than the 25 ms replay, frames are skipped, and a
-  // fault at the 30th inference left no time to recover in.
+  // build's inference of the shipped model (three networks: ~85 ms alone,
+  // twice that beside another test) is slower than the 25 ms replay, frames
+  // are skipped, and a fault at the 30th inference left no time to recover
+  // in. Tests of faults counted in inferences pace the replay by inference
+  // instead (inference_paced_config).
   c.source.replay.frames = 80;
   c.output.console = false;
   c.output.summary = false;
@@ -186,6 +188,19 @@ Config shipped_config() {
   c.supervisor.inference_deadline_ms = 1000;
   c.supervisor.systemd = false;
   c.threads.lock_memory = false;
+  return c;
+}
+
+// For faults counted in inferences (NaN output, publish failure, overrun):
+// every frame is inferred (the replay waits for the slot), so the fault's
+// inference comes however slow a loaded sanitizer build is, with the frames
+// after it to recover in; and the capture thread starved on such a machine
+// must not report stale frames, which the supervisor would name before the
+// fault under test.
+Config inference_paced_config() {
+  Config c = shipped_config();
+  c.source.replay.rate_hz = 0;
+  c.supervisor.frame_timeout_ms = 3000;
   return c;
 }
 
@@ -236,12 +251,11 @@ TEST(FaultInjection, CameraStallDegradesAndRecovers) {
 }
 
 TEST(FaultInjection, InferenceOverrunFlagsLatePosesAndRecovers) {
-  Config c = shipped_config();
+  Config c = inference_paced_config();
   if (c.model.empty()) GTEST_SKIP() << "no shipped model";
   // A slow stage still beats between frames; the hung-stage limit (2 x
-  // frame_timeout) must stay above one overrun frame.
-  c.supervisor.frame_timeout_ms = 3000;
-  c.source.replay.frames = 280;  // 7 s: time to recover after 3.6 s of overrun
+  // frame_timeout, 3 s here) must stay above one overrun frame.
+  c.source.replay.frames = 100;  // 77 frames after the 3.6 s of overrun to recover in
   c.fault_injection.push_back({FaultKind::kInferenceOverrun, 20, 3, 1200});
   std::vector<std::string> t;
   RunStats st;
@@ -302,7 +316,7 @@ TEST(RunLoop, WithheldPosesAreCountedByReason) {
 }
 
 TEST(FaultInjection, NanOutputIsFlaggedWithheldAndRecovers) {
-  Config c = shipped_config();
+  Config c = inference_paced_config();
   if (c.model.empty()) GTEST_SKIP() << "no shipped model";
   c.output.dds.enabled = true;
   c.output.dds.loopback_only = true;
@@ -330,7 +344,7 @@ TEST(FaultInjection, NanOutputIsFlaggedWithheldAndRecovers) {
 }
 
 TEST(FaultInjection, PublishFailureIsReportedAndRecovers) {
-  Config c = shipped_config();
+  Config c = inference_paced_config();
   if (c.model.empty()) GTEST_SKIP() << "no shipped model";
   c.fault_injection.push_back({FaultKind::kPublishFailure, 10, 5, 0});
   std::vector<std::string> t;
